@@ -1,0 +1,54 @@
+#pragma once
+// Edge and planar feature selection by LOAM curvature with the seed paper's distance-adaptive
+// neighbourhood: c = ||sum_{j in S} (X_i - X_j)|| / (|S| * ||X_i||), |S| = 10 / 8 / 6 / 4 for
+// ranges <= 10 / <= 20 / <= 30 / > 30 m (DESIGN.md, "Distance-adaptive curvature").
+
+#include <cstdint>
+#include <vector>
+
+#include "liod/types.hpp"
+
+namespace liod {
+
+enum class CurvatureNeighbourhood { kDistanceAdaptive, kFixed };
+
+struct FeatureParams {
+  CurvatureNeighbourhood neighbourhood = CurvatureNeighbourhood::kDistanceAdaptive;
+  double min_range_m = 2.0;
+  double max_range_m = 120.0;
+  double occlusion_jump_m = 0.5;  // at 10 m; scaled with range
+  double edge_curvature = 0.2;
+  double plane_curvature = 0.05;
+  int sectors_per_ring = 8;
+  int max_edges_per_sector = 6;
+};
+
+/// |S| for a point at this range (both sides together).
+int curvature_neighbourhood_size(double range_m, CurvatureNeighbourhood mode);
+
+struct ScanFeatures {
+  std::vector<std::uint32_t> edges;   // indices into Scan::points
+  std::vector<std::uint32_t> planes;
+};
+
+/// Reuses its buffers from scan to scan, so steady-state extraction does not allocate.
+class FeatureExtractor {
+ public:
+  explicit FeatureExtractor(const FeatureParams& params) : params_(params) {}
+  void extract(const Scan& scan, ScanFeatures& out);
+  /// Curvature of every point of the last scan (NaN where undefined), for diagnostics and tests.
+  const std::vector<float>& curvature() const { return curvature_; }
+
+ private:
+  void process_ring(const Scan& scan, const std::vector<std::uint32_t>& ring, ScanFeatures& out);
+
+  FeatureParams params_;
+  std::vector<std::vector<std::uint32_t>> rings_;
+  std::vector<float> curvature_;
+  std::vector<float> range_;
+  std::vector<float> ring_curvature_;
+  std::vector<std::uint8_t> excluded_;  // per ring position
+  std::vector<std::uint32_t> order_;
+};
+
+}  // namespace liod

@@ -1,0 +1,27 @@
+#pragma once
+// Initial attitude from the accelerometer: the mean specific force points opposite to gravity.
+// At a rolling start the vehicle's own acceleration tilts this estimate, so the filter starts
+// with a roll/pitch uncertainty and the LiDAR corrects it.
+
+#include <Eigen/Core>
+#include <deque>
+#include <optional>
+
+#include "liod/types.hpp"
+
+namespace liod {
+
+struct GravityAlignment {
+  Eigen::Matrix3d rotation;          // R_world_body with zero yaw
+  Eigen::Vector3d gyro_bias;         // mean angular rate if the vehicle stood still, else zero
+  bool stationary = false;
+};
+
+/// Uses the samples in [from, to]; nullopt with fewer than min_samples.
+std::optional<GravityAlignment> align_gravity(const std::deque<ImuSample>& samples, double from, double to,
+                                              std::size_t min_samples = 10);
+
+/// The rotation with zero yaw that maps the body's measured "up" (specific force direction) to +z.
+Eigen::Matrix3d rotation_from_up(const Eigen::Vector3d& up_in_body);
+
+}  // namespace liod

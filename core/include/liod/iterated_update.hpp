@@ -1,0 +1,46 @@
+#pragma once
+// Scan-to-local-map registration, tightly coupled with the IMU: an iterated error-state Kalman
+// update (a Gauss-Newton MAP estimate) whose prior is the IMU-predicted state and covariance.
+// The 15-dim error state is [dtheta (right perturbation of R), dp, dv, dbg, dba]; LiDAR residuals
+// touch only the pose, and the prior's cross-covariances carry their information into velocity
+// and biases.
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "liod/imu_preintegration.hpp"
+#include "liod/map_correspondence.hpp"
+
+namespace liod {
+
+using StateCovariance = Eigen::Matrix<double, 15, 15>;
+
+struct UpdateParams {
+  int max_iterations = 5;
+  double lidar_noise_m = 0.03;
+  CorrespondenceParams correspondence;
+};
+
+struct UpdateResult {
+  NavState state;
+  StateCovariance covariance = StateCovariance::Zero();
+  int residuals = 0;
+  int iterations = 0;
+  double rms_residual_m = 0.0;
+  /// Smallest eigenvalue of the translational block of the LiDAR information (weighted count of
+  /// constraints along the worst direction): low means the scene constrains the pose poorly.
+  double min_translation_eigenvalue = 0.0;
+  double min_rotation_eigenvalue = 0.0;
+};
+
+/// x (+) delta, with the rotation perturbed on the right.
+NavState boxplus(const NavState& x, const Eigen::Matrix<double, 15, 1>& delta);
+/// The error state taking b to a: a = b (+) (a (-) b).
+Eigen::Matrix<double, 15, 1> boxminus(const NavState& a, const NavState& b);
+
+UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior_covariance,
+                             const std::vector<Eigen::Vector3d>& planes_body, const LocalMap& plane_map,
+                             const std::vector<Eigen::Vector3d>& edges_body, const LocalMap& edge_map,
+                             const UpdateParams& params);
+
+}  // namespace liod

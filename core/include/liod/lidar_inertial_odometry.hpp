@@ -1,0 +1,116 @@
+#pragma once
+// The per-scan front end (DESIGN.md, modules 1 and 2): IMU prediction, per-point deskew,
+// distance-adaptive curvature features, tightly coupled scan-to-local-map update, keyframe
+// gating with the Hausdorff test, and the sliding window of keyframes that forms the local map.
+// No threads, no I/O: feed IMU samples and scans in time order, get poses back.
+
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "liod/config.hpp"
+#include "liod/curvature_features.hpp"
+#include "liod/imu_preintegration.hpp"
+#include "liod/imu_trajectory.hpp"
+#include "liod/iterated_update.hpp"
+#include "liod/local_map.hpp"
+#include "liod/types.hpp"
+
+namespace liod {
+
+enum OdometryStatus : std::uint32_t {
+  kStatusInitializing = 1U << 0,
+  kStatusDegenerate = 1U << 1,
+  kStatusKeyframe = 1U << 2,
+  kStatusImuGap = 1U << 3,
+  kStatusFewFeatures = 1U << 4,
+};
+
+struct Keyframe {
+  std::uint64_t id = 0;
+  NavState state;
+  std::vector<Eigen::Vector3d> planes_world;
+  std::vector<Eigen::Vector3d> edges_world;
+  std::vector<Eigen::Vector3d> similarity_cloud_world;  // downsampled, for the Hausdorff test
+};
+
+struct OdometryResult {
+  NavState state;  // body (IMU) frame at the scan's end time, on the IMU clock
+  StateCovariance covariance = StateCovariance::Zero();
+  std::uint32_t status = 0;
+  std::size_t points = 0;
+  std::size_t edge_features = 0;
+  std::size_t plane_features = 0;
+  int residuals = 0;
+  int iterations = 0;
+  double rms_residual_m = 0.0;
+  double min_translation_eigenvalue = 0.0;
+  double hausdorff_m = -1.0;  // -1 when no test ran
+  double deskew_ms = 0.0;
+  double features_ms = 0.0;
+  double registration_ms = 0.0;
+  double map_ms = 0.0;
+};
+
+class LidarInertialOdometry {
+ public:
+  explicit LidarInertialOdometry(const Config& config);
+
+  /// Samples must arrive in time order; out-of-order or non-finite ones are dropped (counted).
+  void add_imu(const ImuSample& sample);
+  /// Latest IMU time, or -inf before any sample.
+  double latest_imu_time() const;
+  /// Time on the IMU clock at which this scan ends: process it once IMU data reaches it.
+  double scan_end_time(const Scan& scan) const { return scan.end_time + extrinsics_.lidar_time_offset_s; }
+
+  /// Estimates the body state at the scan's end. Returns nullopt while it cannot yet (no IMU
+  /// data around the scan). Points must carry per-point times.
+  std::optional<OdometryResult> process(const Scan& scan);
+
+  /// The latest state propagated with the IMU up to the newest sample (IMU-rate output).
+  std::optional<NavState> propagated_state() const;
+
+  bool initialized() const { return initialized_; }
+  const std::deque<Keyframe>& keyframes() const { return keyframes_; }
+  const LocalMap& plane_map() const { return plane_map_; }
+  std::size_t dropped_imu_samples() const { return dropped_imu_; }
+
+ private:
+  struct Features {
+    std::vector<Eigen::Vector3d> planes;
+    std::vector<Eigen::Vector3d> edges;
+  };
+  void initialize(const Scan& scan, OdometryResult& result);
+  PoseTable deskew_trajectory(const Scan& scan, const NavState& start, const NavState& predicted_end,
+                              const std::vector<ImuInterval>& intervals) const;
+  void deskew_features(const Scan& scan, const PoseTable& relative, Features& out);
+  StateCovariance propagate_covariance(const ImuPreintegration& preintegration, const NavState& start) const;
+  void consider_keyframe(const Features& features, OdometryResult& result);
+  void add_keyframe(const Features& features);
+
+  Config config_;
+  ExtrinsicsConfig extrinsics_;
+  Pose lidar_to_imu_;
+  Eigen::Vector3d gravity_;
+  ImuNoise noise_;
+  UpdateParams update_params_;
+  FeatureExtractor extractor_;
+  ScanFeatures scan_features_;
+
+  std::deque<ImuSample> imu_;
+  std::size_t dropped_imu_ = 0;
+  bool initialized_ = false;
+  bool map_trusted_ = false;
+  NavState state_;
+  StateCovariance covariance_ = StateCovariance::Zero();
+  Eigen::Vector3d last_angular_rate_ = Eigen::Vector3d::Zero();  // body frame, for constant-velocity deskew
+
+  LocalMap plane_map_;
+  LocalMap edge_map_;
+  std::deque<Keyframe> keyframes_;
+  std::uint64_t next_keyframe_id_ = 0;
+};
+
+}  // namespace liod

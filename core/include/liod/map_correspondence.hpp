@@ -1,0 +1,31 @@
+#pragma once
+// Point-to-plane and point-to-line correspondences against the local map. Both give a linear
+// residual r = n . q + d in the world point q, so the solver treats them alike: for a line, n is
+// the unit vector from the line to the point (LOAM's point-to-line distance).
+
+#include <Eigen/Core>
+#include <optional>
+
+#include "liod/local_map.hpp"
+
+namespace liod {
+
+struct LinearResidual {
+  Eigen::Vector3d normal;
+  double offset = 0.0;
+  double evaluate(const Eigen::Vector3d& q) const { return normal.dot(q) + offset; }
+};
+
+struct CorrespondenceParams {
+  int neighbours = 5;
+  double max_distance_m = 1.5;
+  double max_plane_thickness_m = 0.1;  // every neighbour within this of the fitted plane
+  double min_line_ratio = 3.0;         // largest / second eigenvalue for a line
+};
+
+std::optional<LinearResidual> plane_correspondence(const LocalMap& map, const Eigen::Vector3d& query,
+                                                   const CorrespondenceParams& params);
+std::optional<LinearResidual> line_correspondence(const LocalMap& map, const Eigen::Vector3d& query,
+                                                  const CorrespondenceParams& params);
+
+}  // namespace liod

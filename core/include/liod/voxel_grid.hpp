@@ -1,0 +1,38 @@
+#pragma once
+// Integer voxel coordinates and voxel-grid downsampling.
+
+#include <Eigen/Core>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+namespace liod {
+
+struct VoxelKey {
+  std::int32_t x = 0;
+  std::int32_t y = 0;
+  std::int32_t z = 0;
+  bool operator==(const VoxelKey& other) const { return x == other.x && y == other.y && z == other.z; }
+};
+
+struct VoxelKeyHash {
+  std::size_t operator()(const VoxelKey& k) const {
+    // The spatial hash of Teschner et al. 2003 (large primes, XOR).
+    return static_cast<std::size_t>((static_cast<std::uint64_t>(static_cast<std::uint32_t>(k.x)) * 73856093ULL) ^
+                                    (static_cast<std::uint64_t>(static_cast<std::uint32_t>(k.y)) * 19349669ULL) ^
+                                    (static_cast<std::uint64_t>(static_cast<std::uint32_t>(k.z)) * 83492791ULL));
+  }
+};
+
+inline VoxelKey voxel_of(const Eigen::Vector3d& p, double inverse_size) {
+  return {static_cast<std::int32_t>(std::floor(p.x() * inverse_size)),
+          static_cast<std::int32_t>(std::floor(p.y() * inverse_size)),
+          static_cast<std::int32_t>(std::floor(p.z() * inverse_size))};
+}
+
+/// Keeps the first point that falls in each voxel of the given size (a real measured point,
+/// not a centroid, so that surfaces are not smeared across corners).
+std::vector<Eigen::Vector3d> voxel_downsample(const std::vector<Eigen::Vector3d>& points, double voxel_size);
+
+}  // namespace liod

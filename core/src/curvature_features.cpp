@@ -1,0 +1,129 @@
+#include "liod/curvature_features.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace liod {
+
+int curvature_neighbourhood_size(double range_m, CurvatureNeighbourhood mode) {
+  if (mode == CurvatureNeighbourhood::kFixed) return 10;
+  if (range_m <= 10.0) return 10;
+  if (range_m <= 20.0) return 8;
+  if (range_m <= 30.0) return 6;
+  return 4;
+}
+
+void FeatureExtractor::extract(const Scan& scan, ScanFeatures& out) {
+  out.edges.clear();
+  out.planes.clear();
+  const std::size_t beams = std::max<std::size_t>(scan.beam_count, 1);
+  if (rings_.size() < beams) rings_.resize(beams);
+  for (auto& ring : rings_) ring.clear();
+  curvature_.assign(scan.points.size(), std::numeric_limits<float>::quiet_NaN());
+  range_.resize(scan.points.size());
+  const float min_range = static_cast<float>(params_.min_range_m);
+  const float max_range = static_cast<float>(params_.max_range_m);
+  for (std::uint32_t i = 0; i < scan.points.size(); ++i) {
+    const auto& p = scan.points[i];
+    const float r = std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
+    range_[i] = r;
+    if (!std::isfinite(r) || r < min_range || r > max_range || p.ring >= rings_.size()) continue;
+    rings_[p.ring].push_back(i);
+  }
+  for (const auto& ring : rings_) process_ring(scan, ring, out);
+}
+
+void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uint32_t>& ring, ScanFeatures& out) {
+  const int n = static_cast<int>(ring.size());
+  constexpr int kMaxHalf = 5;
+  if (n < 2 * kMaxHalf + 1) return;
+  excluded_.assign(static_cast<std::size_t>(n), 0);
+  const auto& pts = scan.points;
+  auto range_at = [&](int k) { return range_[ring[static_cast<std::size_t>(k)]]; };
+
+  // Missing returns leave gaps in time; a window across a gap mixes distant surfaces.
+  // Consecutive firings of one beam are 55.6 us apart at 10 Hz; allow a few missing.
+  constexpr float kMaxFiringGap = 4.0F * 55.56e-6F;
+  auto gap_after = [&](int k) {
+    return pts[ring[static_cast<std::size_t>(k) + 1]].time - pts[ring[static_cast<std::size_t>(k)]].time > kMaxFiringGap;
+  };
+
+  // Occlusion: at a range jump, the far side's points are hidden behind the near object and
+  // their apparent edge moves with the viewpoint, so they are unreliable features.
+  for (int k = 0; k + 1 < n; ++k) {
+    const float r0 = range_at(k);
+    const float r1 = range_at(k + 1);
+    const float jump = static_cast<float>(params_.occlusion_jump_m) * std::max(1.0F, std::min(r0, r1) / 10.0F);
+    if (std::abs(r0 - r1) > jump) {
+      if (r0 > r1) {
+        for (int m = std::max(0, k - kMaxHalf + 1); m <= k; ++m) excluded_[static_cast<std::size_t>(m)] = 1;
+      } else {
+        for (int m = k + 1; m <= std::min(n - 1, k + kMaxHalf); ++m) excluded_[static_cast<std::size_t>(m)] = 1;
+      }
+    }
+  }
+  // Beams nearly parallel to the surface: both neighbours' ranges differ a lot from this one.
+  for (int k = 1; k + 1 < n; ++k) {
+    const float r = range_at(k);
+    if (std::abs(range_at(k - 1) - r) > 0.02F * r && std::abs(range_at(k + 1) - r) > 0.02F * r) {
+      excluded_[static_cast<std::size_t>(k)] = 1;
+    }
+  }
+
+  auto& ring_curvature = ring_curvature_;
+  ring_curvature.assign(static_cast<std::size_t>(n), std::numeric_limits<float>::quiet_NaN());
+  for (int k = kMaxHalf; k < n - kMaxHalf; ++k) {
+    const auto& pi = pts[ring[static_cast<std::size_t>(k)]];
+    const float r = range_at(k);
+    const int half = curvature_neighbourhood_size(r, params_.neighbourhood) / 2;
+    bool broken = false;
+    for (int m = k - half; m < k + half && !broken; ++m) broken = gap_after(m);
+    if (broken) continue;
+    float sx = 0.0F;
+    float sy = 0.0F;
+    float sz = 0.0F;
+    for (int m = k - half; m <= k + half; ++m) {
+      if (m == k) continue;
+      const auto& pj = pts[ring[static_cast<std::size_t>(m)]];
+      sx += pi.x - pj.x;
+      sy += pi.y - pj.y;
+      sz += pi.z - pj.z;
+    }
+    const float c = std::sqrt(sx * sx + sy * sy + sz * sz) / (static_cast<float>(2 * half) * r);
+    ring_curvature[static_cast<std::size_t>(k)] = c;
+    curvature_[ring[static_cast<std::size_t>(k)]] = c;
+  }
+
+  // Per sector: the sharpest points become edges (spread out), the flattest ones planes.
+  const int sectors = std::max(1, params_.sectors_per_ring);
+  for (int s = 0; s < sectors; ++s) {
+    const int begin = s * n / sectors;
+    const int end = (s + 1) * n / sectors;
+    order_.clear();
+    for (int k = begin; k < end; ++k) {
+      const float c = ring_curvature[static_cast<std::size_t>(k)];
+      if (!std::isnan(c) && !excluded_[static_cast<std::size_t>(k)]) order_.push_back(static_cast<std::uint32_t>(k));
+    }
+    std::sort(order_.begin(), order_.end(), [&](std::uint32_t a, std::uint32_t b) {
+      return ring_curvature[a] > ring_curvature[b];
+    });
+    int picked = 0;
+    for (std::uint32_t k : order_) {
+      if (picked >= params_.max_edges_per_sector) break;
+      if (ring_curvature[k] <= static_cast<float>(params_.edge_curvature)) break;
+      if (excluded_[k]) continue;
+      out.edges.push_back(ring[k]);
+      ++picked;
+      // Neighbours of an edge would duplicate it.
+      const int lo = std::max(0, static_cast<int>(k) - kMaxHalf);
+      const int hi = std::min(n - 1, static_cast<int>(k) + kMaxHalf);
+      for (int m = lo; m <= hi; ++m) excluded_[static_cast<std::size_t>(m)] = 1;
+    }
+    for (std::uint32_t k : order_) {
+      if (ring_curvature[k] < static_cast<float>(params_.plane_curvature) && !excluded_[k]) out.planes.push_back(ring[k]);
+    }
+  }
+}
+
+}  // namespace liod

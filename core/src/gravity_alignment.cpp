@@ -1,0 +1,47 @@
+#include "liod/gravity_alignment.hpp"
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+namespace liod {
+
+Eigen::Matrix3d rotation_from_up(const Eigen::Vector3d& up_in_body) {
+  const Eigen::Vector3d up = up_in_body.normalized();
+  // Roll and pitch that level the body; yaw is unobservable and set to zero.
+  const double roll = std::atan2(up.y(), up.z());
+  const double pitch = std::atan2(-up.x(), std::sqrt(up.y() * up.y() + up.z() * up.z()));
+  return (Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+std::optional<GravityAlignment> align_gravity(const std::deque<ImuSample>& samples, double from, double to,
+                                              std::size_t min_samples) {
+  Eigen::Vector3d accel_sum = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gyro_sum = Eigen::Vector3d::Zero();
+  std::size_t n = 0;
+  for (const auto& s : samples) {
+    if (s.time < from || s.time > to) continue;
+    accel_sum += s.accel;
+    gyro_sum += s.gyro;
+    ++n;
+  }
+  if (n < min_samples) return std::nullopt;
+  const Eigen::Vector3d accel_mean = accel_sum / static_cast<double>(n);
+  const Eigen::Vector3d gyro_mean = gyro_sum / static_cast<double>(n);
+  double accel_var = 0.0;
+  double gyro_max = 0.0;
+  for (const auto& s : samples) {
+    if (s.time < from || s.time > to) continue;
+    accel_var += (s.accel - accel_mean).squaredNorm();
+    gyro_max = std::max(gyro_max, s.gyro.norm());
+  }
+  accel_var /= static_cast<double>(n);
+  GravityAlignment out;
+  out.rotation = rotation_from_up(accel_mean);
+  // Standing still: little vibration and no turning; the mean rate is then the gyro bias.
+  out.stationary = accel_var < 0.05 && gyro_max < 0.05;
+  out.gyro_bias = out.stationary ? gyro_mean : Eigen::Vector3d::Zero();
+  return out;
+}
+
+}  // namespace liod

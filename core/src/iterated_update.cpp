@@ -1,0 +1,108 @@
+#include "liod/iterated_update.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <cmath>
+
+#include "liod/so3.hpp"
+
+namespace liod {
+
+using Vector15 = Eigen::Matrix<double, 15, 1>;
+
+NavState boxplus(const NavState& x, const Vector15& delta) {
+  NavState out = x;
+  out.rotation = so3::normalize(x.rotation * so3::exp(delta.segment<3>(0)));
+  out.position += delta.segment<3>(3);
+  out.velocity += delta.segment<3>(6);
+  out.gyro_bias += delta.segment<3>(9);
+  out.accel_bias += delta.segment<3>(12);
+  return out;
+}
+
+Vector15 boxminus(const NavState& a, const NavState& b) {
+  Vector15 d;
+  d.segment<3>(0) = so3::log(b.rotation.transpose() * a.rotation);
+  d.segment<3>(3) = a.position - b.position;
+  d.segment<3>(6) = a.velocity - b.velocity;
+  d.segment<3>(9) = a.gyro_bias - b.gyro_bias;
+  d.segment<3>(12) = a.accel_bias - b.accel_bias;
+  return d;
+}
+
+namespace {
+
+struct Normal6 {
+  Eigen::Matrix<double, 6, 6> hessian = Eigen::Matrix<double, 6, 6>::Zero();  // sum w H^T H
+  Eigen::Matrix<double, 6, 1> gradient = Eigen::Matrix<double, 6, 1>::Zero(); // sum w H^T r
+  double squared_error = 0.0;
+  int count = 0;
+};
+
+// Huber weight: residuals beyond k sigma count linearly, so a bad match cannot dominate.
+double huber_weight(double r, double k) {
+  const double a = std::abs(r);
+  return a <= k ? 1.0 : k / a;
+}
+
+template <typename Correspond>
+void accumulate(const std::vector<Eigen::Vector3d>& points_body, const NavState& x, const LocalMap& map,
+                const UpdateParams& params, Correspond correspond, Normal6& eq) {
+  const double k = 2.0 * params.lidar_noise_m;
+  for (const auto& pb : points_body) {
+    const Eigen::Vector3d q = x.rotation * pb + x.position;
+    const auto residual = correspond(map, q, params.correspondence);
+    if (!residual || residual->normal.isZero()) continue;
+    const double r = residual->evaluate(q);
+    // d q / d dtheta = -R [pb]x  (right perturbation), d q / d p = I.
+    Eigen::Matrix<double, 1, 6> h;
+    h.head<3>() = -residual->normal.transpose() * x.rotation * so3::hat(pb);
+    h.tail<3>() = residual->normal.transpose();
+    const double w = huber_weight(r, k);
+    eq.hessian.noalias() += w * h.transpose() * h;
+    eq.gradient.noalias() += w * h.transpose() * r;
+    eq.squared_error += r * r;
+    ++eq.count;
+  }
+}
+
+}  // namespace
+
+UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior_covariance,
+                             const std::vector<Eigen::Vector3d>& planes_body, const LocalMap& plane_map,
+                             const std::vector<Eigen::Vector3d>& edges_body, const LocalMap& edge_map,
+                             const UpdateParams& params) {
+  const StateCovariance prior_information = prior_covariance.ldlt().solve(StateCovariance::Identity());
+  const double inv_var = 1.0 / (params.lidar_noise_m * params.lidar_noise_m);
+  UpdateResult result;
+  NavState x = prior;
+  Normal6 eq;
+  StateCovariance information = prior_information;
+  for (int iteration = 0; iteration < params.max_iterations; ++iteration) {
+    eq = Normal6{};
+    accumulate(planes_body, x, plane_map, params, plane_correspondence, eq);
+    if (!edge_map.empty()) accumulate(edges_body, x, edge_map, params, line_correspondence, eq);
+    // MAP step: (P^-1 + H^T W H) delta = -H^T W r - P^-1 (x (-) prior)   (iterated EKF).
+    information = prior_information;
+    information.topLeftCorner<6, 6>() += inv_var * eq.hessian;
+    Vector15 rhs = -prior_information * boxminus(x, prior);
+    rhs.head<6>() -= inv_var * eq.gradient;
+    const Vector15 delta = information.ldlt().solve(rhs);
+    if (!delta.allFinite()) break;
+    x = boxplus(x, delta);
+    result.iterations = iteration + 1;
+    if (delta.segment<3>(0).norm() < 1e-5 && delta.segment<3>(3).norm() < 1e-4) break;
+  }
+  result.state = x;
+  result.covariance = information.ldlt().solve(StateCovariance::Identity());
+  result.covariance = 0.5 * (result.covariance + result.covariance.transpose()).eval();
+  result.residuals = eq.count;
+  result.rms_residual_m = eq.count > 0 ? std::sqrt(eq.squared_error / eq.count) : 0.0;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> translation(eq.hessian.bottomRightCorner<3, 3>(), Eigen::EigenvaluesOnly);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> rotation(eq.hessian.topLeftCorner<3, 3>(), Eigen::EigenvaluesOnly);
+  result.min_translation_eigenvalue = translation.eigenvalues()(0);
+  result.min_rotation_eigenvalue = rotation.eigenvalues()(0);
+  return result;
+}
+
+}  // namespace liod

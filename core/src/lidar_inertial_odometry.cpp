@@ -1,0 +1,315 @@
+#include "liod/lidar_inertial_odometry.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "liod/gravity_alignment.hpp"
+#include "liod/hausdorff.hpp"
+#include "liod/so3.hpp"
+#include "liod/voxel_grid.hpp"
+
+namespace liod {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double elapsed_ms(Clock::time_point since) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - since).count();
+}
+
+constexpr double kDegToRad = M_PI / 180.0;
+// While the speed is this uncertain, the deskew of the first scans is unreliable (rolling start).
+constexpr double kTrustedVelocityStd = 0.3;
+
+FeatureParams feature_params(const OdometryConfig& o) {
+  FeatureParams p;
+  p.neighbourhood = o.curvature == CurvatureMode::kAdaptive ? CurvatureNeighbourhood::kDistanceAdaptive
+                                                             : CurvatureNeighbourhood::kFixed;
+  p.min_range_m = o.min_range_m;
+  p.max_range_m = o.max_range_m;
+  p.occlusion_jump_m = o.occlusion_jump_m;
+  p.edge_curvature = o.edge_curvature;
+  p.plane_curvature = o.plane_curvature;
+  p.sectors_per_ring = o.sectors_per_ring;
+  p.max_edges_per_sector = o.max_edges_per_sector;
+  return p;
+}
+
+std::vector<Eigen::Vector3d> transformed(const std::vector<Eigen::Vector3d>& points, const NavState& s) {
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(points.size());
+  for (const auto& p : points) out.push_back(s.rotation * p + s.position);
+  return out;
+}
+
+double velocity_std(const StateCovariance& p) { return std::sqrt(p.block<3, 3>(6, 6).diagonal().maxCoeff()); }
+
+}  // namespace
+
+LidarInertialOdometry::LidarInertialOdometry(const Config& config)
+    : config_(config),
+      extrinsics_(config.extrinsics),
+      lidar_to_imu_{config.extrinsics.lidar_to_imu_rotation, config.extrinsics.lidar_to_imu_translation},
+      gravity_(0.0, 0.0, -config.imu.gravity_m_s2),
+      extractor_(feature_params(config.odometry)),
+      plane_map_(config.odometry.map_voxel_m, config.odometry.map_points_per_voxel, config.odometry.map_min_point_spacing_m),
+      edge_map_(config.odometry.map_voxel_m, config.odometry.map_points_per_voxel, config.odometry.map_min_point_spacing_m) {
+  noise_.gyro_noise_density = config.imu.gyro_noise_density;
+  noise_.accel_noise_density = config.imu.accel_noise_density;
+  noise_.gyro_bias_random_walk = config.imu.gyro_bias_random_walk;
+  noise_.accel_bias_random_walk = config.imu.accel_bias_random_walk;
+  update_params_.max_iterations = config.odometry.max_iterations;
+  update_params_.lidar_noise_m = config.odometry.lidar_noise_m;
+  update_params_.correspondence.max_distance_m = config.odometry.max_correspondence_m;
+}
+
+void LidarInertialOdometry::add_imu(const ImuSample& sample) {
+  const bool finite = std::isfinite(sample.time) && sample.gyro.allFinite() && sample.accel.allFinite();
+  if (!finite || (!imu_.empty() && sample.time <= imu_.back().time)) {
+    ++dropped_imu_;
+    return;
+  }
+  imu_.push_back(sample);
+}
+
+double LidarInertialOdometry::latest_imu_time() const {
+  return imu_.empty() ? -std::numeric_limits<double>::infinity() : imu_.back().time;
+}
+
+StateCovariance LidarInertialOdometry::propagate_covariance(const ImuPreintegration& pre, const NavState& start) const {
+  // Error-state transition over the whole interval (derived from the prediction of
+  // ImuPreintegration::predict with R = R_hat Exp(dtheta), biases held constant).
+  const double dt = pre.duration();
+  const Eigen::Matrix3d& r = start.rotation;
+  const Eigen::Matrix3d dr = pre.delta_rotation(start.gyro_bias);
+  const Eigen::Vector3d dv = pre.delta_velocity(start.gyro_bias, start.accel_bias);
+  const Eigen::Vector3d dp = pre.delta_position(start.gyro_bias, start.accel_bias);
+  StateCovariance f = StateCovariance::Identity();
+  f.block<3, 3>(0, 0) = dr.transpose();
+  f.block<3, 3>(0, 9) = pre.d_rotation_d_gyro_bias();
+  f.block<3, 3>(3, 0) = -r * so3::hat(dp);
+  f.block<3, 3>(3, 6) = Eigen::Matrix3d::Identity() * dt;
+  f.block<3, 3>(3, 9) = r * pre.d_position_d_gyro_bias();
+  f.block<3, 3>(3, 12) = r * pre.d_position_d_accel_bias();
+  f.block<3, 3>(6, 0) = -r * so3::hat(dv);
+  f.block<3, 3>(6, 9) = r * pre.d_velocity_d_gyro_bias();
+  f.block<3, 3>(6, 12) = r * pre.d_velocity_d_accel_bias();
+  // Preintegration noise [dphi, dv, dp] into the state order [theta, p, v].
+  Eigen::Matrix<double, 15, 9> g = Eigen::Matrix<double, 15, 9>::Zero();
+  g.block<3, 3>(0, 0) = Eigen::Matrix3d::Identity();
+  g.block<3, 3>(6, 3) = r;
+  g.block<3, 3>(3, 6) = r;
+  StateCovariance q = g * pre.covariance() * g.transpose();
+  q.block<3, 3>(9, 9) += Eigen::Matrix3d::Identity() * noise_.gyro_bias_random_walk * noise_.gyro_bias_random_walk * dt;
+  q.block<3, 3>(12, 12) += Eigen::Matrix3d::Identity() * noise_.accel_bias_random_walk * noise_.accel_bias_random_walk * dt;
+  StateCovariance out = f * covariance_ * f.transpose() + q;
+  return 0.5 * (out + out.transpose());
+}
+
+PoseTable LidarInertialOdometry::deskew_trajectory(const Scan& scan, const NavState& start, const NavState& end,
+                                                   const std::vector<ImuInterval>& intervals) const {
+  PoseTable table;
+  const double t_start = scan.start_time + extrinsics_.lidar_time_offset_s;
+  const double t_end = scan_end_time(scan);
+  switch (config_.odometry.deskew) {
+    case DeskewMode::kImu: {
+      table = integrate_imu_poses(start, intervals, gravity_);
+      table.make_relative_to({Eigen::Quaterniond(end.rotation), end.position});
+      break;
+    }
+    case DeskewMode::kConstantVelocity: {
+      // LOAM's assumption: the last estimated twist holds through the sweep.
+      const Eigen::Vector3d v_body = end.rotation.transpose() * end.velocity;
+      constexpr int kSteps = 10;
+      for (int k = 0; k <= kSteps; ++k) {
+        const double t = t_start + (t_end - t_start) * k / kSteps;
+        const double before_end = t_end - t;
+        table.add(t, {Eigen::Quaterniond(so3::exp(-last_angular_rate_ * before_end)), -v_body * before_end});
+      }
+      break;
+    }
+    case DeskewMode::kNone:
+      table.add(t_end, {});
+      break;
+  }
+  return table;
+}
+
+void LidarInertialOdometry::deskew_features(const Scan& scan, const PoseTable& relative, Features& out) {
+  const double t0 = scan.start_time + extrinsics_.lidar_time_offset_s;
+  auto to_end_frame = [&](std::uint32_t index) {
+    const LidarPoint& p = scan.points[index];
+    const Eigen::Vector3d in_imu = lidar_to_imu_ * Eigen::Vector3d(p.x, p.y, p.z);
+    return relative.at(t0 + static_cast<double>(p.time)) * in_imu;
+  };
+  std::vector<Eigen::Vector3d> planes;
+  planes.reserve(scan_features_.planes.size());
+  for (auto i : scan_features_.planes) planes.push_back(to_end_frame(i));
+  std::vector<Eigen::Vector3d> edges;
+  edges.reserve(scan_features_.edges.size());
+  for (auto i : scan_features_.edges) edges.push_back(to_end_frame(i));
+  out.planes = voxel_downsample(planes, config_.odometry.plane_voxel_m);
+  out.edges = voxel_downsample(edges, config_.odometry.edge_voxel_m);
+}
+
+void LidarInertialOdometry::initialize(const Scan& scan, OdometryResult& result) {
+  const double t_start = scan.start_time + extrinsics_.lidar_time_offset_s;
+  const auto alignment = align_gravity(imu_, t_start - 1.0, scan_end_time(scan));
+  if (!alignment) return;
+  const auto& o = config_.odometry;
+  state_ = NavState{};
+  state_.time = t_start;
+  state_.rotation = alignment->rotation;
+  state_.gyro_bias = alignment->gyro_bias;
+  covariance_.setZero();
+  const double tilt = o.init_tilt_std_deg * kDegToRad;
+  covariance_.diagonal().segment<3>(0) << tilt * tilt, tilt * tilt, 1e-6;  // yaw defines the world frame
+  covariance_.diagonal().segment<3>(3).setConstant(1e-6);                    // so does the origin
+  const double v_std = alignment->stationary ? 0.05 : o.init_velocity_std;
+  covariance_.diagonal().segment<3>(6).setConstant(v_std * v_std);
+  covariance_.diagonal().segment<3>(9).setConstant(o.init_gyro_bias_std * o.init_gyro_bias_std);
+  covariance_.diagonal().segment<3>(12).setConstant(o.init_accel_bias_std * o.init_accel_bias_std);
+  initialized_ = true;
+  result.status |= kStatusInitializing;
+}
+
+std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
+  OdometryResult result;
+  result.points = scan.points.size();
+  if (scan.points.empty() || imu_.empty()) return std::nullopt;
+  if (!initialized_) {
+    initialize(scan, result);
+    if (!initialized_) return std::nullopt;
+  }
+  const double t_end = scan_end_time(scan);
+  if (!(t_end > state_.time)) return std::nullopt;  // a scan from the past (clock jump): skip it
+  if (latest_imu_time() < t_end - config_.imu.max_gap_s) result.status |= kStatusImuGap;
+
+  auto t = Clock::now();
+  const NavState start = state_;
+  const auto intervals = imu_intervals(imu_, start.time, t_end);
+  ImuPreintegration preintegration(start.gyro_bias, start.accel_bias, noise_);
+  for (const auto& iv : intervals) preintegration.integrate(iv.gyro, iv.accel, iv.dt);
+  NavState predicted = preintegration.predict(start, gravity_);
+  predicted.time = t_end;
+  const StateCovariance predicted_covariance = propagate_covariance(preintegration, start);
+  PoseTable relative = deskew_trajectory(scan, start, predicted, intervals);
+  result.deskew_ms = elapsed_ms(t);
+
+  t = Clock::now();
+  extractor_.extract(scan, scan_features_);
+  result.features_ms = elapsed_ms(t);
+  t = Clock::now();
+  Features features;
+  deskew_features(scan, relative, features);
+  result.deskew_ms += elapsed_ms(t);
+  result.edge_features = features.edges.size();
+  result.plane_features = features.planes.size();
+
+  t = Clock::now();
+  if (plane_map_.empty()) {
+    state_ = predicted;
+    covariance_ = predicted_covariance;
+  } else {
+    UpdateResult update = iterated_update(predicted, predicted_covariance, features.planes, plane_map_, features.edges,
+                                          edge_map_, update_params_);
+    if (velocity_std(predicted_covariance) > kTrustedVelocityStd && config_.odometry.deskew == DeskewMode::kImu) {
+      // Rolling start: the deskew above assumed the prior speed. Re-deskew with the speed the
+      // LiDAR just measured (start velocity implied by the updated end state) and update again.
+      NavState corrected_start = start;
+      corrected_start.velocity = update.state.velocity - gravity_ * preintegration.duration() -
+                                 start.rotation * preintegration.delta_velocity(start.gyro_bias, start.accel_bias);
+      relative = deskew_trajectory(scan, corrected_start, preintegration.predict(corrected_start, gravity_), intervals);
+      deskew_features(scan, relative, features);
+      update = iterated_update(predicted, predicted_covariance, features.planes, plane_map_, features.edges, edge_map_,
+                               update_params_);
+    }
+    state_ = update.state;
+    state_.time = t_end;
+    covariance_ = update.covariance;
+    result.residuals = update.residuals;
+    result.iterations = update.iterations;
+    result.rms_residual_m = update.rms_residual_m;
+    result.min_translation_eigenvalue = update.min_translation_eigenvalue;
+    if (update.min_translation_eigenvalue < config_.odometry.degeneracy_eigenvalue) result.status |= kStatusDegenerate;
+    if (update.residuals < 50) result.status |= kStatusFewFeatures;
+  }
+  result.registration_ms = elapsed_ms(t);
+  if (preintegration.duration() > 0.0) {
+    last_angular_rate_ = so3::log(start.rotation.transpose() * state_.rotation) / preintegration.duration();
+  }
+
+  t = Clock::now();
+  // The first keyframes of a rolling start were deskewed with an unknown speed: once the speed
+  // is known, start the map afresh from the current, correctly deskewed scan.
+  if (!map_trusted_ && velocity_std(covariance_) < kTrustedVelocityStd) {
+    map_trusted_ = true;
+    keyframes_.clear();
+    plane_map_ = LocalMap(config_.odometry.map_voxel_m, config_.odometry.map_points_per_voxel,
+                          config_.odometry.map_min_point_spacing_m);
+    edge_map_ = plane_map_;
+  }
+  consider_keyframe(features, result);
+  result.map_ms = elapsed_ms(t);
+
+  while (imu_.size() > 2 && imu_[1].time < state_.time - 0.5) imu_.pop_front();
+  result.state = state_;
+  result.covariance = covariance_;
+  return result;
+}
+
+void LidarInertialOdometry::consider_keyframe(const Features& features, OdometryResult& result) {
+  const auto& o = config_.odometry;
+  if (keyframes_.empty()) {
+    add_keyframe(features);
+    result.status |= kStatusKeyframe;
+    return;
+  }
+  const NavState& last = keyframes_.back().state;
+  const double distance = (state_.position - last.position).norm();
+  const double angle = so3::log(last.rotation.transpose() * state_.rotation).norm();
+  if (distance < o.keyframe_distance_m && angle < o.keyframe_angle_deg * kDegToRad) return;
+  if (o.keyframe_gating == KeyframeGating::kHausdorff) {
+    std::vector<Eigen::Vector3d> cloud = transformed(features.planes, state_);
+    const auto edges = transformed(features.edges, state_);
+    cloud.insert(cloud.end(), edges.begin(), edges.end());
+    cloud = voxel_downsample(cloud, o.hausdorff_voxel_m);
+    result.hausdorff_m = hausdorff_distance(cloud, keyframes_.back().similarity_cloud_world, 4.0 * o.hausdorff_threshold_m);
+    if (result.hausdorff_m <= o.hausdorff_threshold_m) return;
+  }
+  add_keyframe(features);
+  result.status |= kStatusKeyframe;
+}
+
+void LidarInertialOdometry::add_keyframe(const Features& features) {
+  Keyframe kf;
+  kf.id = next_keyframe_id_++;
+  kf.state = state_;
+  kf.planes_world = transformed(features.planes, state_);
+  kf.edges_world = transformed(features.edges, state_);
+  kf.similarity_cloud_world = kf.planes_world;
+  kf.similarity_cloud_world.insert(kf.similarity_cloud_world.end(), kf.edges_world.begin(), kf.edges_world.end());
+  kf.similarity_cloud_world = voxel_downsample(kf.similarity_cloud_world, config_.odometry.hausdorff_voxel_m);
+  plane_map_.add(kf.planes_world, kf.id);
+  edge_map_.add(kf.edges_world, kf.id);
+  keyframes_.push_back(std::move(kf));
+  while (keyframes_.size() > static_cast<std::size_t>(config_.odometry.window_keyframes)) {
+    const Keyframe& oldest = keyframes_.front();
+    plane_map_.remove_keyframe(oldest.planes_world, oldest.id);
+    edge_map_.remove_keyframe(oldest.edges_world, oldest.id);
+    keyframes_.pop_front();
+  }
+}
+
+std::optional<NavState> LidarInertialOdometry::propagated_state() const {
+  if (!initialized_ || imu_.empty() || imu_.back().time <= state_.time) return std::nullopt;
+  const auto intervals = imu_intervals(imu_, state_.time, imu_.back().time);
+  ImuPreintegration preintegration(state_.gyro_bias, state_.accel_bias, noise_);
+  for (const auto& iv : intervals) preintegration.integrate(iv.gyro, iv.accel, iv.dt);
+  NavState out = preintegration.predict(state_, gravity_);
+  out.time = imu_.back().time;
+  return out;
+}
+
+}  // namespace liod

@@ -1,0 +1,62 @@
+#include "liod/map_correspondence.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <array>
+
+namespace liod {
+namespace {
+
+struct Moments {
+  Eigen::Vector3d mean;
+  Eigen::Matrix3d covariance;
+};
+
+Moments moments(const std::array<Eigen::Vector3d, LocalMap::kMaxNeighbours>& pts, int n) {
+  Moments m{Eigen::Vector3d::Zero(), Eigen::Matrix3d::Zero()};
+  for (int i = 0; i < n; ++i) m.mean += pts[static_cast<std::size_t>(i)];
+  m.mean /= n;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d d = pts[static_cast<std::size_t>(i)] - m.mean;
+    m.covariance += d * d.transpose();
+  }
+  m.covariance /= n;
+  return m;
+}
+
+}  // namespace
+
+std::optional<LinearResidual> plane_correspondence(const LocalMap& map, const Eigen::Vector3d& query,
+                                                   const CorrespondenceParams& params) {
+  std::array<Eigen::Vector3d, LocalMap::kMaxNeighbours> nn;
+  const int n = map.nearest(query, params.neighbours, params.max_distance_m, nn);
+  if (n < params.neighbours) return std::nullopt;
+  const Moments m = moments(nn, n);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(m.covariance);
+  const Eigen::Vector3d normal = eig.eigenvectors().col(0).normalized();
+  const double offset = -normal.dot(m.mean);
+  for (int i = 0; i < n; ++i) {
+    if (std::abs(normal.dot(nn[static_cast<std::size_t>(i)]) + offset) > params.max_plane_thickness_m) return std::nullopt;
+  }
+  return LinearResidual{normal, offset};
+}
+
+std::optional<LinearResidual> line_correspondence(const LocalMap& map, const Eigen::Vector3d& query,
+                                                  const CorrespondenceParams& params) {
+  std::array<Eigen::Vector3d, LocalMap::kMaxNeighbours> nn;
+  const int n = map.nearest(query, params.neighbours, params.max_distance_m, nn);
+  if (n < params.neighbours) return std::nullopt;
+  const Moments m = moments(nn, n);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(m.covariance);
+  const Eigen::Vector3d ev = eig.eigenvalues();
+  if (!(ev(2) > params.min_line_ratio * ev(1))) return std::nullopt;
+  const Eigen::Vector3d direction = eig.eigenvectors().col(2).normalized();
+  const Eigen::Vector3d off_line = (Eigen::Matrix3d::Identity() - direction * direction.transpose()) * (query - m.mean);
+  const double distance = off_line.norm();
+  if (distance < 1e-6) return LinearResidual{Eigen::Vector3d::Zero(), 0.0};
+  const Eigen::Vector3d normal = off_line / distance;
+  return LinearResidual{normal, -normal.dot(m.mean)};
+}
+
+}  // namespace liod
