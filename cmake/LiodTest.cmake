@@ -6,7 +6,7 @@ function(liod_add_test name)
   target_compile_definitions(${name} PRIVATE
     LIOD_SHARED_DIR="${LIOD_SHARED_DIR}" LIOD_SOURCE_DIR="${CMAKE_SOURCE_DIR}"
     LIOD_BINARY_DIR="${CMAKE_BINARY_DIR}")
-  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 900)
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 900 LABELS ${name})
 endfunction()
 
 # liod_add_benchmark(NAME SOURCES... LIBS ...): one Google Benchmark executable (not a CTest test).

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Runs liod's whole test suite from a fresh clone: installs what is missing, builds the decoding
+# and algorithm tests with AddressSanitizer + UndefinedBehaviorSanitizer and runs them, then
+# builds the Release tree (tests, tools, benchmarks) and runs every test.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+jobs=$(nproc)
+
+bash scripts/install-deps.sh
+
+# Sanitizers: the code that parses untrusted bytes and the algorithm's core.
+sanitized=(test_drivers test_core test_config)
+cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIOD_SANITIZE="address;undefined" >/dev/null
+cmake --build build-asan -j"$jobs" --target "${sanitized[@]}"
+(cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+   ctest --output-on-failure -j"$jobs" -L "$(IFS='|'; echo "${sanitized[*]}")")
+
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build -j"$jobs"
+(cd build && ctest --output-on-failure -j"$jobs")

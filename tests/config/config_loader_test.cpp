@@ -1,0 +1,94 @@
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "liod/config.hpp"
+
+namespace {
+
+std::string error_of(const std::string& yaml) {
+  try {
+    liod::load_config_from_string(yaml, "test.yaml");
+  } catch (const liod::ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::filesystem::path write_temp(const std::string& name, const std::string& text) {
+  const auto path = std::filesystem::temp_directory_path() / name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+TEST(ConfigLoader, ShippedConfigLoadsAndMatchesDefaults) {
+  const auto config = liod::load_config({std::string(LIOD_SOURCE_DIR) + "/config/liod.yaml"});
+  const liod::Config defaults;
+  EXPECT_EQ(config.lidar.msop_port, defaults.lidar.msop_port);
+  EXPECT_DOUBLE_EQ(config.odometry.hausdorff_threshold_m, defaults.odometry.hausdorff_threshold_m);
+  EXPECT_EQ(config.odometry.window_keyframes, 25);
+  EXPECT_EQ(config.odometry.deskew, liod::DeskewMode::kImu);
+}
+
+TEST(ConfigLoader, UnknownKeyNamesFileKeyAndValue) {
+  const auto msg = error_of("odometry:\n  window_keyframe: 25\n");
+  EXPECT_NE(msg.find("test.yaml:2"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("odometry.window_keyframe"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("'25'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("unknown key"), std::string::npos) << msg;
+}
+
+TEST(ConfigLoader, WrongTypeIsRejected) {
+  const auto msg = error_of("lidar:\n  msop_port: fast\n");
+  EXPECT_NE(msg.find("lidar.msop_port"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("'fast'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("integer"), std::string::npos) << msg;
+}
+
+TEST(ConfigLoader, OutOfRangeIsRejected) {
+  const auto msg = error_of("lidar:\n  msop_port: 70000\n");
+  EXPECT_NE(msg.find("[1, 65535]"), std::string::npos) << msg;
+  EXPECT_NE(error_of("odometry:\n  lidar_noise_m: .nan\n"), "");
+  EXPECT_NE(error_of("odometry:\n  deskew: sometimes\n").find("imu"), std::string::npos);
+}
+
+TEST(ConfigLoader, RelationsBetweenKeysAreChecked) {
+  const auto msg = error_of("odometry:\n  min_range_m: 50\n  max_range_m: 40\n");
+  EXPECT_NE(msg.find("odometry.max_range_m"), std::string::npos) << msg;
+  EXPECT_NE(error_of("log:\n  level: loud\n").find("log.level"), std::string::npos);
+}
+
+TEST(ConfigLoader, QuaternionMustBeUnitAndListsNeedTheirLength) {
+  EXPECT_NE(error_of("extrinsics:\n  lidar_to_imu:\n    rotation_xyzw: [0, 0, 0, 2]\n").find("unit quaternion"), std::string::npos);
+  EXPECT_NE(error_of("extrinsics:\n  lidar_to_imu:\n    translation_m: [1, 2]\n").find("3 numbers"), std::string::npos);
+}
+
+TEST(ConfigLoader, LaterFilesOverrideEarlierOnes) {
+  const auto base = write_temp("liod_base.yaml", "odometry:\n  max_iterations: 7\nlidar:\n  msop_port: 7000\n");
+  const auto overlay = write_temp("liod_overlay.yaml",
+                                  "extrinsics:\n  lidar_to_imu:\n    translation_m: [0.5, 0, 1.0]\n"
+                                  "    rotation_xyzw: [0, 0, 0.7071067811865476, 0.7071067811865476]\n"
+                                  "  lidar_time_offset_s: 0.003\nlidar:\n  msop_port: 7001\n");
+  const auto c = liod::load_config({base.string(), overlay.string()});
+  EXPECT_EQ(c.odometry.max_iterations, 7);
+  EXPECT_EQ(c.lidar.msop_port, 7001);
+  EXPECT_NEAR(c.extrinsics.lidar_to_imu_translation.z(), 1.0, 1e-12);
+  EXPECT_NEAR(c.extrinsics.lidar_time_offset_s, 0.003, 1e-12);
+  const Eigen::Vector3d x_in_imu = c.extrinsics.lidar_to_imu_rotation * Eigen::Vector3d::UnitX();
+  EXPECT_NEAR(x_in_imu.y(), 1.0, 1e-9);  // a 90 degree yaw
+}
+
+TEST(ConfigLoader, MissingFileAndBrokenYamlAreReported) {
+  try {
+    liod::load_config({"/nonexistent/liod.yaml"});
+    FAIL() << "expected an error";
+  } catch (const liod::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/liod.yaml"), std::string::npos);
+  }
+  EXPECT_NE(error_of("odometry: [unclosed\n").find("not valid YAML"), std::string::npos);
+  EXPECT_NE(error_of("- a\n- b\n").find("mapping"), std::string::npos);
+}
+
+}  // namespace

@@ -1,0 +1,58 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+#include "liod/local_map.hpp"
+
+namespace {
+
+std::vector<Eigen::Vector3d> random_cloud(std::size_t n, unsigned seed, double extent) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-extent, extent);
+  std::vector<Eigen::Vector3d> out;
+  for (std::size_t i = 0; i < n; ++i) out.emplace_back(u(rng), u(rng), u(rng));
+  return out;
+}
+
+TEST(LocalMap, NearestNeighboursMatchBruteForce) {
+  liod::LocalMap map(1.0, 1000, 0.0);
+  const auto cloud = random_cloud(5000, 1, 10.0);
+  map.add(cloud, 0);
+  ASSERT_EQ(map.size(), cloud.size());
+  for (const auto& q : random_cloud(200, 2, 9.0)) {
+    std::array<Eigen::Vector3d, liod::LocalMap::kMaxNeighbours> nn;
+    const int found = map.nearest(q, 5, 1.0, nn);
+    std::vector<double> d;
+    for (const auto& p : cloud) {
+      if ((p - q).norm() < 1.0) d.push_back((p - q).norm());
+    }
+    std::sort(d.begin(), d.end());
+    ASSERT_EQ(found, static_cast<int>(std::min<std::size_t>(5, d.size())));
+    for (int i = 0; i < found; ++i) EXPECT_NEAR((nn[static_cast<std::size_t>(i)] - q).norm(), d[static_cast<std::size_t>(i)], 1e-12);
+  }
+}
+
+TEST(LocalMap, SpacingAndCapacityLimitDensity) {
+  liod::LocalMap map(1.0, 3, 0.2);
+  map.add({{0.1, 0.1, 0.1}, {0.15, 0.1, 0.1}, {0.5, 0.5, 0.5}, {0.9, 0.9, 0.9}, {0.9, 0.1, 0.1}}, 0);
+  EXPECT_EQ(map.size(), 3U);  // one too close, one over capacity
+}
+
+TEST(LocalMap, RemovingAKeyframeRemovesOnlyItsPoints) {
+  liod::LocalMap map(1.0, 100, 0.0);
+  const auto a = random_cloud(300, 3, 5.0);
+  const auto b = random_cloud(300, 4, 5.0);
+  map.add(a, 1);
+  map.add(b, 2);
+  EXPECT_EQ(map.size(), 600U);
+  map.remove_keyframe(a, 1);
+  EXPECT_EQ(map.size(), 300U);
+  std::array<Eigen::Vector3d, liod::LocalMap::kMaxNeighbours> nn;
+  for (const auto& p : b) {
+    ASSERT_EQ(map.nearest(p, 1, 0.5, nn), 1);
+    EXPECT_LT((nn[0] - p).norm(), 1e-12);
+  }
+}
+
+}  // namespace
