@@ -9,6 +9,7 @@
 #include "liod/config.hpp"
 #include "liod/daemon/decode_command.hpp"
 #include "liod/daemon/logging.hpp"
+#include "liod/daemon/replay.hpp"
 
 namespace {
 
@@ -41,12 +42,29 @@ int main(int argc, char** argv) {
   decode->add_option("--angles", decode_options.angles_csv, "calibration CSV (vertical_deg,horizontal_deg) used until a DIFOP arrives");
   decode->add_option("--out", decode_options.out_dir, "directory for one PCD file per sweep");
 
+  auto* replay = app.add_subcommand("replay", "Run a recorded drive (LiDAR pcap + IMU CSV) through the odometry");
+  std::vector<std::string> replay_configs;
+  liod::ReplayOptions replay_options;
+  replay->add_option("--config", replay_configs, "configuration file(s), later ones override")->required()->check(CLI::ExistingFile);
+  replay->add_option("--pcap", replay_options.pcap, "LiDAR packets (pcap or pcapng)")->required()->check(CLI::ExistingFile);
+  replay->add_option("--imu", replay_options.imu_csv, "IMU log (CSV, see README)")->required()->check(CLI::ExistingFile);
+  replay->add_option("--trajectory", replay_options.trajectory_tum, "output: scan-rate poses, TUM format")->required();
+  replay->add_option("--imu-rate-trajectory", replay_options.imu_rate_tum, "output: IMU-rate poses, TUM format");
+  replay->add_option("--scan-log", replay_options.scan_log_csv, "output: per-scan status, features and timings (CSV)");
+  replay->add_flag("!--no-progress", replay_options.progress, "no progress bar (one is drawn only on a terminal)");
+  replay_options.progress = true;
+
   CLI11_PARSE(app, argc, argv);
 
   try {
     liod::setup_logging(log_level.empty() ? "info" : log_level);
     if (*check) return check_config(check_paths);
     if (*decode) return liod::run_decode(decode_options, std::cout);
+    if (*replay) {
+      const liod::Config config = liod::load_config(replay_configs);
+      if (log_level.empty()) spdlog::set_level(spdlog::level::from_str(config.log.level));
+      return liod::run_replay(config, replay_options, std::cout);
+    }
   } catch (const liod::ConfigError& e) {
     spdlog::error("{}", e.what());
     return kConfigErrorExit;

@@ -1,0 +1,19 @@
+#include "liod/daemon/trajectory_writer.hpp"
+
+#include <Eigen/Geometry>
+#include <stdexcept>
+
+namespace liod {
+
+TrajectoryWriter::TrajectoryWriter(const std::string& path) : file_(std::fopen(path.c_str(), "w")) {
+  if (!file_) throw std::runtime_error(path + ": cannot open for writing");
+  std::fprintf(file_.get(), "# t x y z qx qy qz qw (body/IMU frame in the gravity-aligned world)\n");
+}
+
+void TrajectoryWriter::write(const NavState& s) {
+  const Eigen::Quaterniond q(s.rotation);
+  std::fprintf(file_.get(), "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", s.time, s.position.x(), s.position.y(),
+               s.position.z(), q.x(), q.y(), q.z(), q.w());
+}
+
+}  // namespace liod
