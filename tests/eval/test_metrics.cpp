@@ -1,0 +1,109 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "liod/eval/io.hpp"
+#include "liod/eval/metrics.hpp"
+#include "synthetic.hpp"
+
+namespace liod::eval {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+Poses line(std::size_t n) {
+  Poses p;
+  for (std::size_t i = 0; i < n; ++i) p.push_back(test::pose(static_cast<double>(i), 0, 0));
+  return p;
+}
+
+std::vector<double> seconds(std::size_t n, double dt) {
+  std::vector<double> s;
+  for (std::size_t i = 0; i < n; ++i) s.push_back(dt * static_cast<double>(i));
+  return s;
+}
+
+TEST(Stats, MatchesNumpyConventions) {
+  const auto s = summarize({3.0, 1.0, 4.0, 2.0});
+  ASSERT_TRUE(s);
+  EXPECT_NEAR(s->mean, 2.5, 1e-15);
+  EXPECT_NEAR(s->median, 2.5, 1e-15);  // mean of the two middle values
+  EXPECT_NEAR(s->rmse, std::sqrt(30.0 / 4.0), 1e-15);
+  EXPECT_NEAR(s->std, std::sqrt(1.25), 1e-15);  // population std, as np.std
+  EXPECT_EQ(s->min, 1.0);
+  EXPECT_EQ(s->max, 4.0);
+  EXPECT_EQ(s->count, 4U);
+  EXPECT_FALSE(summarize({}));
+}
+
+TEST(Rpe, OnePerturbedPositionGivesTwoKnownErrors) {
+  // Pose 2 of 5 is 0.1 m off sideways: the pairs (1,2) and (2,3) each see 0.1 m, the others 0.
+  const Poses gt = line(5);
+  Poses est = gt;
+  est[2].translation().y() += 0.1;
+  const auto r = compute_rpe(seconds(5, 1.0), gt, est, {1.0, DeltaUnit::Frames});
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->pairs, 4U);
+  EXPECT_NEAR(r->translation.rmse, std::sqrt(0.02 / 4.0), 1e-12);
+  EXPECT_NEAR(r->translation.mean, 0.05, 1e-12);
+  EXPECT_NEAR(r->translation.median, 0.05, 1e-12);
+  EXPECT_NEAR(r->translation.max, 0.1, 1e-12);
+  EXPECT_NEAR(r->translation.min, 0.0, 1e-12);
+  EXPECT_NEAR(r->rotation.max, 0.0, 1e-12);
+}
+
+TEST(Rpe, OnePerturbedHeadingFollowsEvosDefinition) {
+  // Pose 2 yawed by 2 deg in place. E = (Q_i^-1 Q_j)^-1 (P_i^-1 P_j):
+  //  (1,2): rotation 2 deg, translation 0;
+  //  (2,3): rotation 2 deg, translation |Rz(-2deg)(1,0,0) - (1,0,0)| = 2 sin(1 deg).
+  const Poses gt = line(5);
+  Poses est = gt;
+  est[2] = test::pose(2, 0, 0, 2.0 * kDeg);
+  const auto r = compute_rpe(seconds(5, 1.0), gt, est, {1.0, DeltaUnit::Seconds});
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->pairs, 4U);
+  EXPECT_NEAR(r->rotation.max, 2.0, 1e-9);
+  EXPECT_NEAR(r->rotation.mean, 1.0, 1e-9);
+  EXPECT_NEAR(r->translation.max, 2.0 * std::sin(1.0 * kDeg), 1e-12);
+  EXPECT_NEAR(r->translation.mean, 2.0 * std::sin(1.0 * kDeg) / 4.0, 1e-12);
+}
+
+TEST(Rpe, IsInvariantToARigidMotionOfTheEstimate) {
+  const Poses gt = test::wiggly(100);
+  Poses est;
+  const Eigen::Isometry3d T = test::pose(10, 20, 30, 1.0);
+  for (const auto& p : gt) est.push_back(T * p);
+  const auto r = compute_rpe(seconds(100, 0.1), gt, est, {1.0, DeltaUnit::Seconds});
+  ASSERT_TRUE(r);
+  EXPECT_NEAR(r->translation.max, 0.0, 1e-9);
+  EXPECT_NEAR(r->rotation.max, 0.0, 1e-6);
+}
+
+TEST(RpePairs, FramesSecondsAndMetres) {
+  const Poses gt = line(11);  // 1 m apart
+  const auto f = rpe_pairs(seconds(11, 0.1), gt, {3.0, DeltaUnit::Frames});
+  EXPECT_EQ(f, (std::vector<std::pair<std::size_t, std::size_t>>{{0, 3}, {3, 6}, {6, 9}}));
+  // 10 Hz stamps written as decimals: 0.1 * 10 may land a hair under 1.0; the slack still counts it.
+  const auto s = rpe_pairs(seconds(11, 0.1), gt, {1.0, DeltaUnit::Seconds});
+  EXPECT_EQ(s, (std::vector<std::pair<std::size_t, std::size_t>>{{0, 10}}));
+  // evo's filter_pairs_by_path: indices where the accumulated path reaches delta; the first is at 2 m.
+  const auto m = rpe_pairs(seconds(11, 0.1), gt, {2.0, DeltaUnit::Metres});
+  EXPECT_EQ(m, (std::vector<std::pair<std::size_t, std::size_t>>{{2, 4}, {4, 6}, {6, 8}, {8, 10}}));
+}
+
+TEST(Rpe, TooShortForDeltaIsNotANumber) {
+  const Poses gt = line(5);
+  EXPECT_FALSE(compute_rpe(seconds(5, 0.1), gt, gt, {1.0, DeltaUnit::Seconds}));
+  EXPECT_THROW(compute_rpe(seconds(5, 0.1), gt, gt, {0.0, DeltaUnit::Seconds}), InputError);
+}
+
+TEST(RotationAngle, AccurateForTinyAndLargeAngles) {
+  for (const double a : {1e-9, 1e-5, 0.3, 3.0}) {
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(a, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+    EXPECT_NEAR(rotation_angle(R), a, 1e-15 + 1e-12 * a) << a;
+  }
+}
+
+}  // namespace
+}  // namespace liod::eval

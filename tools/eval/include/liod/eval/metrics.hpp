@@ -1,0 +1,73 @@
+#pragma once
+// Absolute and relative trajectory errors, defined as evo defines them (Grupp, evo, metrics.py) so
+// numbers can be compared with papers that used evo.
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "liod/eval/trajectory.hpp"
+
+namespace liod::eval {
+
+/// Summary of a list of errors, as evo reports it: std is the population deviation (numpy's default),
+/// median averages the two middle values of an even count.
+struct Stats {
+  double rmse = 0.0;
+  double mean = 0.0;
+  double median = 0.0;
+  double std = 0.0;
+  double min = 0.0;
+  double max = 0.0;
+  std::size_t count = 0;
+};
+
+/// nullopt for an empty list: no statistic beats a made-up one.
+std::optional<Stats> summarize(std::vector<double> values);
+
+struct AteResult {
+  /// |p_est_i - p_gt_i| per pair, metres (after alignment).
+  std::vector<double> translation_m;
+  /// angle(R_gt_i^T R_est_i) per pair, degrees.
+  std::vector<double> rotation_deg;
+  Stats translation;
+  Stats rotation;
+};
+
+/// gt and est pairwise corresponding and non-empty; est already aligned.
+AteResult compute_ate(const Poses& gt, const Poses& est);
+
+enum class DeltaUnit { Metres, Seconds, Frames };
+DeltaUnit parse_delta_unit(const std::string& text);  // m | s | frames; throws InputError
+const char* to_string(DeltaUnit unit);
+
+struct RpeOptions {
+  double delta = 1.0;
+  DeltaUnit unit = DeltaUnit::Seconds;
+};
+
+/// Consecutive (non-overlapping) pairs (i, j) spaced by delta:
+///  - frames: i = 0, d, 2d, ... (evo's filter_pairs_by_index);
+///  - metres: evo's filter_pairs_by_path on the ground truth: an index is taken each time the path
+///    accumulated since the last taken index reaches delta (the first at the first crossing);
+///  - seconds (not in evo, which has no time unit): from index 0, the next index is the first whose
+///    stamp is at least delta later (1 us slack so 10 Hz stamps written as decimals still count).
+std::vector<std::pair<std::size_t, std::size_t>> rpe_pairs(const std::vector<double>& stamps, const Poses& gt,
+                                                            const RpeOptions& options);
+
+struct RpeResult {
+  RpeOptions options;
+  std::size_t pairs = 0;
+  Stats translation;  // metres
+  Stats rotation;     // degrees
+};
+
+/// E_ij = (Q_i^-1 Q_j)^-1 (P_i^-1 P_j), Q ground truth, P estimate (evo's RPE); the translation error
+/// is |trans(E)| and the rotation error angle(rot(E)). nullopt when no pair fits (trajectory shorter
+/// than delta).
+std::optional<RpeResult> compute_rpe(const std::vector<double>& stamps, const Poses& gt, const Poses& est,
+                                     const RpeOptions& options);
+
+}  // namespace liod::eval
