@@ -1,0 +1,116 @@
+#pragma once
+// RS-Helios stream decoder: feed it every UDP payload from the sensor (MSOP and DIFOP, told apart
+// by magic, spec §1) and it calls back with each finished sweep. Owns the stream state rs_driver
+// keeps: calibration (DIFOP, else the angle CSV), return mode (DIFOP, else detected), rotation
+// rate, packet-loss accounting, and the sweep split.
+//
+//   RsHeliosDecoder dec(options, [&](liod::Scan& scan, const SweepInfo& info) {
+//     std::swap(scan, my_recycled_scan);  // allocation-free hand-off
+//     ...
+//   });
+//   while (reader.next(d)) dec.feed(d.payload, d.capture_time_ns);
+//   dec.flush();
+
+#include <cstdint>
+#include <optional>
+#include <span>
+
+#include "liod/drivers/packet_points.hpp"
+#include "liod/drivers/rs_helios_calibration.hpp"
+#include "liod/drivers/rs_helios_difop.hpp"
+#include "liod/drivers/rs_helios_model.hpp"
+#include "liod/drivers/rs_helios_msop.hpp"
+#include "liod/drivers/sweep_assembler.hpp"
+
+namespace liod::drivers {
+
+enum class ReturnModePolicy : std::uint8_t {
+  Auto,        ///< DIFOP's return-mode byte; before any DIFOP, single unless a 5515 packet has the
+               ///< duplicated-azimuth dual pattern (§7). (The 16P's dual layout cannot be detected.)
+  ForceSingle,
+  ForceDual,
+};
+
+struct HeliosOptions {
+  HeliosModel model = HeliosModel::Helios5515;
+  /// Angle table from load_angles_csv (rows == lasers). A valid DIFOP table replaces it when
+  /// use_difop_angles is set (spec §5). Without either, MSOP packets are counted and dropped.
+  std::optional<AngleTable> angles;
+  bool use_difop_angles = true;
+  MsopDecoderOptions msop;
+  ReturnModePolicy return_mode = ReturnModePolicy::Auto;
+  double split_azimuth_deg = 0.0;
+  double max_block_gap_s = 0.05;
+  bool emit_partial_sweep_on_flush = false;
+};
+
+struct HeliosStats {
+  std::uint64_t msop = 0;   ///< MSOP packets decoded (fully or up to a broken block flag)
+  std::uint64_t difop = 0;  ///< DIFOP packets parsed
+  std::uint64_t points = 0;
+  // Packets refused, by reason.
+  std::uint64_t wrong_size = 0;
+  std::uint64_t bad_magic = 0;  ///< neither MSOP nor DIFOP magic
+  std::uint64_t bad_timestamp = 0;
+  std::uint64_t bad_azimuth = 0;
+  std::uint64_t broken_first_block = 0;
+  std::uint64_t no_calibration = 0;
+  // Accepted with a defect.
+  std::uint64_t broken_block_flag = 0;      ///< decoded only up to a broken block flag
+  std::uint64_t difop_angles_rejected = 0;  ///< DIFOPs whose angle table failed §6's checks
+  std::uint64_t unknown_range_flag = 0;     ///< header byte 17 neither 0 nor 1 (2.5 mm assumed)
+  // Stream continuity.
+  std::uint64_t lost_packets = 0;     ///< gaps in the bottom-board packet counter
+  std::uint64_t counter_resets = 0;   ///< counter went backwards or jumped implausibly far
+  std::uint64_t azimuth_jumps = 0;    ///< packet-to-packet azimuth step > 1° (loss or blind zone)
+  std::uint64_t time_gaps = 0;        ///< sweeps cut short by a time gap or a clock step
+  std::uint64_t sweeps = 0;
+  std::uint64_t partial_sweeps_dropped = 0;
+
+  [[nodiscard]] std::uint64_t rejected() const noexcept {
+    return wrong_size + bad_magic + bad_timestamp + bad_azimuth + broken_first_block + no_calibration;
+  }
+};
+
+enum class PacketKind : std::uint8_t { Msop, Difop, Rejected };
+
+class RsHeliosDecoder {
+ public:
+  using SweepCallback = SweepAssembler::Callback;
+
+  /// Throws InputError when options.angles does not have one row per laser.
+  RsHeliosDecoder(HeliosOptions options, SweepCallback on_sweep);
+
+  /// One UDP payload; `arrival_ns` is the capture/arrival time (used for TimeSource::ArrivalTime).
+  /// May call the sweep callback. Never throws on bad packets: they are counted in stats().
+  PacketKind feed(std::span<const std::uint8_t> payload, std::int64_t arrival_ns = 0);
+  /// End of stream; see SweepOptions::emit_partial_on_flush.
+  void flush();
+
+  [[nodiscard]] HeliosStats stats() const noexcept;
+  [[nodiscard]] const std::optional<HeliosDifop>& last_difop() const noexcept { return difop_; }
+  /// True when the last decoded MSOP packet was decoded with the dual-return layout.
+  [[nodiscard]] bool dual_return() const noexcept { return last_dual_; }
+  [[nodiscard]] HeliosModel model() const noexcept { return options_.model; }
+
+ private:
+  void on_difop(const HeliosDifop& difop);
+  void on_msop_header(const MsopHeader& header);
+  [[nodiscard]] bool packet_is_dual(std::span<const std::uint8_t> payload) const noexcept;
+
+  HeliosOptions options_;
+  MsopDecoder msop_;
+  SweepAssembler sweeps_;
+  PacketPoints packet_;
+  MsopHeader header_;
+  HeliosDifop scratch_difop_;
+  std::optional<HeliosDifop> difop_;
+  HeliosStats stats_;
+  bool have_counter_ = false;
+  std::uint32_t last_counter_ = 0;
+  bool have_azimuth_ = false;
+  std::uint16_t last_azimuth_ = 0;
+  bool last_dual_ = false;
+};
+
+}  // namespace liod::drivers

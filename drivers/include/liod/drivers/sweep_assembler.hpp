@@ -1,0 +1,82 @@
+#pragma once
+// Cuts the stream of decoded packets into sweeps (liod::Scan), splitting at a configurable block
+// azimuth like rs_driver's split-by-angle (spec §9), and rebasing point times onto the sweep.
+//
+// Allocation: the working Scan keeps its capacity from sweep to sweep. The callback receives the
+// finished Scan by reference; to stay allocation-free it should std::swap it with a Scan it
+// recycles (whatever is left in the reference is cleared and becomes the next working buffer).
+// Moving out of it also works but costs one allocation per sweep.
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+
+#include "liod/drivers/packet_points.hpp"
+#include "liod/types.hpp"
+
+namespace liod::drivers {
+
+struct SweepOptions {
+  /// A sweep starts at the first block whose azimuth crosses this angle (the 359.99° → 0° wrap
+  /// counts as crossing 0°).
+  double split_azimuth_deg = 0.0;
+  /// A jump in block time larger than this (or backwards) ends the sweep early: lost packets or
+  /// a clock step make the azimuth test unreliable across the gap.
+  double max_block_gap_s = 0.05;
+  /// flush() emits a last, incomplete sweep only when this is set; by default an end of stream
+  /// drops it (a SLAM front end would otherwise see a fragment). The first sweep of a stream is
+  /// always emitted even though it usually starts mid-revolution: SweepInfo::azimuth_coverage_deg
+  /// tells consumers how complete it is (rs_driver and nebula emit it too).
+  bool emit_partial_on_flush = false;
+  std::uint16_t beam_count = 32;
+  /// Capacity reserved up front for the working sweep (points).
+  std::size_t reserve_points = 0;
+};
+
+/// What the assembler knows about a sweep beyond the Scan itself.
+struct SweepInfo {
+  std::uint16_t first_azimuth = 0;  ///< 0.01°
+  std::uint16_t last_azimuth = 0;   ///< 0.01°
+  std::uint32_t blocks = 0;         ///< firing blocks (a dual-return pair counts twice)
+  std::uint32_t packets = 0;        ///< packets with at least one block in this sweep
+  /// Sum of the azimuth steps between consecutive firings, ignoring jumps > 1° (blind zone, loss).
+  double azimuth_coverage_deg = 0.0;
+  bool ended_by_gap = false;  ///< cut by a time gap rather than by the split azimuth
+  bool flushed = false;       ///< emitted by flush() (incomplete)
+};
+
+class SweepAssembler {
+ public:
+  using Callback = std::function<void(Scan& scan, const SweepInfo& info)>;
+
+  SweepAssembler(SweepOptions options, Callback on_sweep);
+
+  void add(const PacketPoints& packet);
+  /// End of stream: emits the open sweep if it has blocks and options.emit_partial_on_flush is
+  /// set, otherwise drops it (counted). Then starts afresh.
+  void flush();
+
+  [[nodiscard]] std::uint64_t sweeps_emitted() const noexcept { return next_sequence_; }
+  [[nodiscard]] std::uint64_t partial_sweeps_dropped() const noexcept { return partial_dropped_; }
+  [[nodiscard]] std::uint64_t time_gaps() const noexcept { return time_gaps_; }
+
+ private:
+  void start_sweep(std::int64_t block_time_ns, std::uint16_t azimuth);
+  void finish_sweep();
+  [[nodiscard]] bool crosses_split(std::uint16_t prev, std::uint16_t az) const noexcept;
+
+  SweepOptions options_;
+  Callback on_sweep_;
+  std::int32_t split_units_ = 0;
+  Scan current_;
+  SweepInfo info_;
+  bool open_ = false;
+  std::int64_t reference_ns_ = 0;    // time base of current_'s point times until finish
+  std::int64_t last_block_ns_ = 0;
+  std::uint16_t last_azimuth_ = 0;
+  std::uint64_t next_sequence_ = 0;
+  std::uint64_t partial_dropped_ = 0;
+  std::uint64_t time_gaps_ = 0;
+};
+
+}  // namespace liod::drivers

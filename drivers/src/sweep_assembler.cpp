@@ -1,0 +1,121 @@
+#include "liod/drivers/sweep_assembler.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+namespace liod::drivers {
+namespace {
+constexpr std::int32_t kFullCircle = 36000;
+constexpr std::int32_t kMaxFiringStep = 100;  // 1°: larger steps are the blind zone or loss (§3)
+}  // namespace
+
+SweepAssembler::SweepAssembler(SweepOptions options, Callback on_sweep)
+    : options_(options), on_sweep_(std::move(on_sweep)) {
+  double split = std::fmod(options_.split_azimuth_deg, 360.0);
+  if (split < 0) split += 360.0;
+  split_units_ = static_cast<std::int32_t>(std::lround(split * 100.0)) % kFullCircle;
+  current_.beam_count = options_.beam_count;
+  current_.points.reserve(options_.reserve_points);
+}
+
+bool SweepAssembler::crosses_split(std::uint16_t prev, std::uint16_t az) const noexcept {
+  // Unwrap prev below az when the azimuth wrapped, then ask whether split lies in (prev, az].
+  std::int32_t p = prev;
+  if (az < prev) p -= kFullCircle;
+  const std::int32_t a = az;
+  return (p < split_units_ && split_units_ <= a) ||
+         (p < split_units_ - kFullCircle && split_units_ - kFullCircle <= a);
+}
+
+void SweepAssembler::start_sweep(std::int64_t block_time_ns, std::uint16_t azimuth) {
+  open_ = true;
+  reference_ns_ = block_time_ns;
+  info_ = SweepInfo{};
+  info_.first_azimuth = azimuth;
+  current_.points.clear();
+  current_.beam_count = options_.beam_count;
+}
+
+void SweepAssembler::add(const PacketPoints& packet) {
+  bool counted_packet = false;
+  for (std::size_t b = 0; b < packet.block_count; ++b) {
+    const FiringBlock& block = packet.blocks[b];
+    const std::int64_t block_ns =
+        packet.time_ns + static_cast<std::int64_t>(std::llround(static_cast<double>(block.time_offset_s) * 1e9));
+    if (!open_) {
+      start_sweep(block_ns, block.azimuth);
+    } else {
+      const double gap_s = static_cast<double>(block_ns - last_block_ns_) * 1e-9;
+      const bool gap = gap_s < 0.0 || gap_s > options_.max_block_gap_s;
+      if (gap) ++time_gaps_;
+      if (gap || crosses_split(last_azimuth_, block.azimuth)) {
+        const std::int32_t step = (block.azimuth - last_azimuth_ + kFullCircle) % kFullCircle;
+        if (!gap && step <= kMaxFiringStep) info_.azimuth_coverage_deg += step * 0.01;
+        info_.ended_by_gap = gap;
+        finish_sweep();
+        start_sweep(block_ns, block.azimuth);
+        counted_packet = false;
+      } else {
+        const std::int32_t step = (block.azimuth - last_azimuth_ + kFullCircle) % kFullCircle;
+        if (step <= kMaxFiringStep) info_.azimuth_coverage_deg += step * 0.01;
+      }
+    }
+    if (!counted_packet) {
+      ++info_.packets;
+      counted_packet = true;
+    }
+    ++info_.blocks;
+    info_.last_azimuth = block.azimuth;
+    last_azimuth_ = block.azimuth;
+    last_block_ns_ = block_ns;
+
+    // Rebase the block's points from packet time onto the sweep's reference time.
+    const double packet_to_ref_s = static_cast<double>(packet.time_ns - reference_ns_) * 1e-9;
+    const std::size_t end = std::size_t{block.first_point} + block.point_count;
+    for (std::size_t i = block.first_point; i < end; ++i) {
+      LidarPoint p = packet.points[i];
+      p.time = static_cast<float>(packet_to_ref_s + static_cast<double>(p.time));
+      current_.points.push_back(p);
+    }
+  }
+}
+
+void SweepAssembler::finish_sweep() {
+  // start_time is the earliest point, not the first block: the first block's first slots may have
+  // had no return, and firing order is not monotonic in slot order (§3.1).
+  float t_min = 0.0F;
+  float t_max = 0.0F;
+  if (!current_.points.empty()) {
+    t_min = std::numeric_limits<float>::max();
+    t_max = std::numeric_limits<float>::lowest();
+    for (const LidarPoint& p : current_.points) {
+      t_min = std::min(t_min, p.time);
+      t_max = std::max(t_max, p.time);
+    }
+    for (LidarPoint& p : current_.points) p.time -= t_min;
+  }
+  const double reference_s = static_cast<double>(reference_ns_) * 1e-9;
+  current_.start_time = reference_s + static_cast<double>(t_min);
+  current_.end_time = reference_s + static_cast<double>(t_max);
+  current_.sequence = next_sequence_++;
+  current_.beam_count = options_.beam_count;
+  on_sweep_(current_, info_);
+  current_.points.clear();
+  open_ = false;
+}
+
+void SweepAssembler::flush() {
+  if (!open_) return;
+  if (options_.emit_partial_on_flush && info_.blocks > 0) {
+    info_.flushed = true;
+    finish_sweep();
+  } else {
+    ++partial_dropped_;
+    current_.points.clear();
+    open_ = false;
+  }
+}
+
+}  // namespace liod::drivers

@@ -1,0 +1,164 @@
+// Sweep splitting, time rebasing, loss accounting and buffer reuse, on synthetic packet streams.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "liod/drivers/rs_helios.hpp"
+#include "test_support.hpp"
+
+namespace liod::drivers {
+namespace {
+
+using test::SyntheticBlock;
+
+constexpr double kT = 55.56e-6;
+
+/// A 10 Hz single-return 5515 stream: packet i covers blocks 12i..12i+11 from `start_az`.
+class Stream {
+ public:
+  explicit Stream(std::uint16_t start_az) : start_az_(start_az) {}
+  std::vector<std::uint8_t> packet(std::size_t i) const {
+    std::array<SyntheticBlock, 12> blocks{};
+    for (std::size_t k = 0; k < 12; ++k) {
+      blocks[k].azimuth = static_cast<std::uint16_t>((start_az_ + 20 * (12 * i + k)) % 36000);
+      blocks[k].raw_distance.fill(800);  // 2 m
+      blocks[k].intensity.fill(9);
+    }
+    const auto t_us = static_cast<std::int64_t>(std::llround(1.7e15 + static_cast<double>(i) * 12 * kT * 1e6));
+    return test::make_msop(t_us, static_cast<std::uint32_t>(1000 + i), blocks);
+  }
+
+ private:
+  std::uint16_t start_az_;
+};
+
+HeliosOptions options(double split_deg) {
+  HeliosOptions o;
+  o.angles = AngleTable{std::vector<double>(32, 0.0), std::vector<double>(32, 0.0)};
+  for (std::size_t i = 0; i < 32; ++i) o.angles->vertical_deg[i] = -16.0 + static_cast<double>(i);
+  o.split_azimuth_deg = split_deg;
+  return o;
+}
+
+struct Collected {
+  std::vector<Scan> scans;
+  std::vector<SweepInfo> infos;
+};
+
+Collected run(HeliosOptions o, const Stream& stream, std::size_t packets, const std::set<std::size_t>& skip = {}) {
+  Collected c;
+  RsHeliosDecoder dec(std::move(o), [&](Scan& s, const SweepInfo& info) {
+    c.scans.push_back(s);
+    c.infos.push_back(info);
+  });
+  for (std::size_t i = 0; i < packets; ++i)
+    if (!skip.contains(i)) dec.feed(stream.packet(i));
+  dec.flush();
+  return c;
+}
+
+TEST(SweepAssembly, SplitsAtZeroAcrossTheWrap) {
+  // Start at 90°: a 270° first sweep, then full 360° sweeps of 150 packets.
+  const Collected c = run(options(0.0), Stream(9000), 150 * 3);
+  ASSERT_EQ(c.scans.size(), 3U);  // partial + 2 full; the last partial is dropped at flush
+  EXPECT_EQ(c.infos[0].first_azimuth, 9000);
+  EXPECT_EQ(c.infos[0].blocks, 1350U);
+  EXPECT_NEAR(c.infos[0].azimuth_coverage_deg, 270.0, 1e-6);
+  for (std::size_t i = 1; i < 3; ++i) {
+    SCOPED_TRACE(i);
+    EXPECT_EQ(c.infos[i].first_azimuth, 0);
+    EXPECT_EQ(c.infos[i].last_azimuth, 35980);
+    EXPECT_EQ(c.infos[i].blocks, 1800U);
+    EXPECT_NEAR(c.infos[i].azimuth_coverage_deg, 360.0, 1e-6);
+    EXPECT_EQ(c.scans[i].points.size(), 1800U * 32U);
+    EXPECT_EQ(c.scans[i].sequence, i);
+    EXPECT_EQ(c.scans[i].beam_count, 32);
+    // 1800 blocks: the last block starts 1799 × 55.56 µs after the first, plus its last firing.
+    EXPECT_NEAR(c.scans[i].end_time - c.scans[i].start_time, 1799 * kT + 45.15e-6, 2e-6);
+    EXPECT_NEAR(c.scans[i].start_time - c.scans[i - 1].start_time, i == 1 ? 1350 * kT : 1800 * kT, 2e-6);
+  }
+  // Rings are the elevation ranks; all 32 present.
+  std::set<std::uint16_t> rings;
+  for (const LidarPoint& p : c.scans[1].points) rings.insert(p.ring);
+  EXPECT_EQ(rings.size(), 32U);
+}
+
+TEST(SweepAssembly, SplitAngleInsideTheSweep) {
+  const Collected c = run(options(180.0), Stream(0), 150 * 3);
+  ASSERT_EQ(c.scans.size(), 3U);
+  EXPECT_EQ(c.infos[0].first_azimuth, 0);
+  EXPECT_EQ(c.infos[0].last_azimuth, 17980);
+  for (std::size_t i = 1; i < 3; ++i) {
+    EXPECT_EQ(c.infos[i].first_azimuth, 18000);
+    EXPECT_EQ(c.infos[i].blocks, 1800U);
+  }
+}
+
+TEST(SweepAssembly, SplitJustBeforeTheWrapAndFlushOfThePartialLastSweep) {
+  HeliosOptions o = options(359.99);
+  o.emit_partial_sweep_on_flush = true;
+  const Collected c = run(o, Stream(9000), 150 * 2);
+  ASSERT_EQ(c.scans.size(), 3U);
+  EXPECT_EQ(c.infos[1].first_azimuth, 0);  // 359.8° -> 0° crosses 359.99°
+  EXPECT_TRUE(c.infos[2].flushed);
+  EXPECT_EQ(c.infos[2].blocks, 2U * 1800U - 1350U - 1800U);
+}
+
+TEST(SweepAssembly, LostPacketsAreCountedAndALongGapCutsTheSweep) {
+  Collected c;
+  HeliosStats stats;
+  {
+    RsHeliosDecoder dec(options(0.0), [&](Scan& s, const SweepInfo& info) {
+      c.scans.push_back(s);
+      c.infos.push_back(info);
+    });
+    const Stream stream(0);
+    for (std::size_t i = 0; i < 400; ++i) {
+      if (i == 10 || i == 11 || i == 12) continue;  // 3 packets lost: a 0.72° azimuth jump
+      if (i >= 200 && i < 300) continue;            // 67 ms silent: more than max_block_gap_s
+      dec.feed(stream.packet(i));
+    }
+    stats = dec.stats();
+  }
+  EXPECT_EQ(stats.lost_packets, 3U + 100U);
+  EXPECT_EQ(stats.azimuth_jumps, 2U);  // 7.4° after the 3 lost packets, 240° after the 100
+  EXPECT_EQ(stats.time_gaps, 1U);
+  ASSERT_GE(c.scans.size(), 2U);
+  // Loss is not coverage: the 7.4° jump over the 36 missing blocks is left out entirely.
+  EXPECT_NEAR(c.infos[0].azimuth_coverage_deg, 360.0 - 37 * 0.2, 1e-6);
+  EXPECT_TRUE(c.infos[1].ended_by_gap);
+}
+
+TEST(SweepAssembly, BuffersAreRecycledWhenTheConsumerSwaps) {
+  std::vector<const LidarPoint*> buffers;
+  Scan recycled;
+  RsHeliosDecoder dec(options(0.0), [&](Scan& s, const SweepInfo&) {
+    std::swap(s, recycled);
+    buffers.push_back(recycled.points.data());
+  });
+  const Stream stream(0);
+  for (std::size_t i = 0; i < 150 * 8 + 1; ++i) dec.feed(stream.packet(i));
+  ASSERT_EQ(buffers.size(), 8U);
+  // Two buffers ping-pong between the decoder and the consumer: no new allocation per sweep.
+  const std::set<const LidarPoint*> distinct(buffers.begin() + 1, buffers.end());
+  EXPECT_LE(distinct.size(), 2U);
+}
+
+TEST(SweepAssembly, ArrivalTimeStampsReplaceTheSensorClock) {
+  HeliosOptions o = options(0.0);
+  o.msop.time_source = TimeSource::ArrivalTime;
+  o.emit_partial_sweep_on_flush = true;
+  std::vector<Scan> scans;
+  RsHeliosDecoder dec(o, [&](Scan& s, const SweepInfo&) { scans.push_back(s); });
+  const Stream stream(0);
+  const std::int64_t arrival = 5'000'000'000LL;
+  dec.feed(stream.packet(0), arrival);
+  dec.flush();
+  ASSERT_EQ(scans.size(), 1U);
+  // §3: arrival minus one packet duration (12 × 55.56 µs) is block 0's time.
+  EXPECT_NEAR(scans[0].start_time, 5.0 - 12 * kT, 1e-7);
+}
+
+}  // namespace
+}  // namespace liod::drivers
