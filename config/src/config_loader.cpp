@@ -99,6 +99,65 @@ class Schema {
     };
   }
 
+  /// A list of CAN signal mappings (drivers.imu.can_signals): each entry a mapping with
+  /// quantity, id, [id_mask], byte, [bytes], [endian], [signed], [scale], [offset].
+  void can_signals(const std::string& key, std::vector<CanSignalConfig>* target) {
+    setters_[key] = [=](const Source& src) {
+      if (!src.node.IsSequence()) fail(src, "must be a list of signal mappings");
+      std::vector<CanSignalConfig> out;
+      for (std::size_t i = 0; i < src.node.size(); ++i) {
+        const YAML::Node& e = src.node[i];
+        const std::string k = key + "[" + std::to_string(i) + "]";
+        if (!e.IsMap()) fail(Source{src.file, k, e}, "must be a mapping");
+        CanSignalConfig sig;
+        bool have_id = false;
+        bool have_quantity = false;
+        for (const auto& f : e) {
+          const std::string name = f.first.as<std::string>();
+          const Source fs{src.file, k + "." + name, f.second};
+          auto u32 = [&](std::uint32_t limit) {
+            const long long v = scalar<long long>(fs, "an integer");
+            if (v < 0 || v > static_cast<long long>(limit)) fail(fs, "must be an integer in [0, " + std::to_string(limit) + "]");
+            return static_cast<std::uint32_t>(v);
+          };
+          if (name == "quantity") {
+            sig.quantity = scalar<std::string>(fs, "a string");
+            static const char* kQ[] = {"gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"};
+            bool ok = false;
+            for (const char* q : kQ) ok = ok || sig.quantity == q;
+            if (!ok) fail(fs, "must be one of gyro_x, gyro_y, gyro_z, accel_x, accel_y, accel_z");
+            have_quantity = true;
+          } else if (name == "id") {
+            sig.can_id = u32(0x1FFFFFFF);
+            have_id = true;
+          } else if (name == "id_mask") {
+            sig.id_mask = u32(0x1FFFFFFF);
+          } else if (name == "byte") {
+            sig.byte_offset = static_cast<int>(u32(63));
+          } else if (name == "bytes") {
+            sig.length_bytes = static_cast<int>(u32(4));
+            if (sig.length_bytes != 1 && sig.length_bytes != 2 && sig.length_bytes != 4) fail(fs, "must be 1, 2 or 4");
+          } else if (name == "endian") {
+            const auto v = scalar<std::string>(fs, "a string");
+            if (v != "little" && v != "big") fail(fs, "must be little or big");
+            sig.big_endian = v == "big";
+          } else if (name == "signed") {
+            sig.is_signed = scalar<bool>(fs, "true or false");
+          } else if (name == "scale" || name == "offset") {
+            const double v = scalar<double>(fs, "a number");
+            if (!std::isfinite(v)) fail(fs, "must be finite");
+            (name == "scale" ? sig.scale : sig.offset) = v;
+          } else {
+            fail(fs, "unknown key (quantity, id, id_mask, byte, bytes, endian, signed, scale, offset)");
+          }
+        }
+        if (!have_id || !have_quantity) fail(Source{src.file, k, e}, "needs at least 'quantity' and 'id'");
+        out.push_back(sig);
+      }
+      *target = out;
+    };
+  }
+
   const Setter* find(const std::string& key) const {
     const auto it = setters_.find(key);
     return it == setters_.end() ? nullptr : &it->second;
@@ -173,6 +232,8 @@ Schema declare_schema(Config& c) {
            {{"hausdorff", KeyframeGating::kHausdorff}, {"distance_angle", KeyframeGating::kDistanceAngle}});
   s.real("odometry.min_range_m", &o.min_range_m, 0.0, 50.0);
   s.real("odometry.max_range_m", &o.max_range_m, 5.0, 500.0);
+  s.vector3("odometry.crop_box_min_m", &o.crop_box_min_m, 50.0);
+  s.vector3("odometry.crop_box_max_m", &o.crop_box_max_m, 50.0);
   s.real("odometry.occlusion_jump_m", &o.occlusion_jump_m, 0.01, 10.0);
   s.real("odometry.edge_curvature", &o.edge_curvature, 0.0, 10.0);
   s.real("odometry.plane_curvature", &o.plane_curvature, 0.0, 10.0);
@@ -200,6 +261,55 @@ Schema declare_schema(Config& c) {
   s.boolean("backend.enabled", &c.backend.enabled);
   s.text("output.pose_socket", &c.output.pose_socket);
   s.text("output.state_dir", &c.output.state_dir);
+
+  auto& dl = c.drivers.lidar;
+  s.text("drivers.lidar.bind_address", &dl.bind_address);
+  s.text("drivers.lidar.multicast_group", &dl.multicast_group);
+  s.text("drivers.lidar.multicast_interface", &dl.multicast_interface);
+  s.text("drivers.lidar.source_address", &dl.source_address);
+  s.integer("drivers.lidar.receive_buffer_bytes", &dl.receive_buffer_bytes, 65536, 1 << 30);
+  s.integer("drivers.lidar.batch", &dl.batch, 1, 1024);
+  s.real("drivers.lidar.lost_after_s", &dl.lost_after_s, 0.05, 60.0);
+  auto& di = c.drivers.imu;
+  s.choice("drivers.imu.transport", &di.transport,
+           {{"serial", ImuTransport::kSerial}, {"can", ImuTransport::kCan}, {"file", ImuTransport::kFile},
+            {"none", ImuTransport::kNone}});
+  s.text("drivers.imu.serial_device", &di.serial_device);
+  s.integer("drivers.imu.serial_baud", &di.serial_baud, 9600, 4000000);
+  s.text("drivers.imu.can_interface", &di.can_interface);
+  s.choice("drivers.imu.can_profile", &di.can_profile, {{"j1939", CanProfile::kJ1939}, {"table", CanProfile::kTable}});
+  s.integer("drivers.imu.j1939_source_address", &di.j1939_source_address, -1, 255);
+  s.can_signals("drivers.imu.can_signals", &di.can_signals);
+  s.text("drivers.imu.file", &di.file);
+  s.real("drivers.imu.file_pace", &di.file_pace, 0.01, 1000.0);
+  s.real("drivers.imu.lost_after_s", &di.lost_after_s, 0.005, 60.0);
+
+  s.choice("time.lidar_clock", &c.time.lidar_clock,
+           {{"auto", LidarClock::kAuto}, {"sensor", LidarClock::kSensor}, {"host", LidarClock::kHost}});
+  s.real("time.offset_window_s", &c.time.offset_window_s, 0.1, 600.0);
+  s.real("time.jump_threshold_s", &c.time.jump_threshold_s, 0.001, 3600.0);
+  s.real("time.imu_wait_s", &c.time.imu_wait_s, 0.0, 5.0);
+  s.text("time.pps_chip", &c.time.pps_chip);
+  s.integer("time.pps_line", &c.time.pps_line, 0, 1023);
+
+  for (auto [name, t] : {std::pair{"lidar", &c.threads.lidar}, std::pair{"imu", &c.threads.imu},
+                         std::pair{"odometry", &c.threads.odometry}, std::pair{"publisher", &c.threads.publisher}}) {
+    s.integer(std::string("threads.") + name + ".priority", &t->priority, 0, 99);
+    s.integer(std::string("threads.") + name + ".cpu", &t->cpu, -1, 1023);
+  }
+  s.integer("threads.backend_nice", &c.threads.backend_nice, -20, 19);
+  s.integer("threads.scan_ring", &c.threads.scan_ring, 2, 1024);
+  s.integer("threads.imu_ring", &c.threads.imu_ring, 16, 1 << 20);
+  s.integer("threads.pose_ring", &c.threads.pose_ring, 16, 1 << 20);
+  s.integer("threads.keyframe_ring", &c.threads.keyframe_ring, 2, 65536);
+
+  s.text("pose_socket.mode", &c.pose_socket.mode);
+  s.integer("pose_socket.max_clients", &c.pose_socket.max_clients, 1, 4096);
+  s.integer("pose_socket.client_buffer_bytes", &c.pose_socket.client_buffer_bytes, 4096, 1 << 28);
+  s.real("pose_socket.stuck_timeout_s", &c.pose_socket.stuck_timeout_s, 0.01, 3600.0);
+  s.boolean("pose_socket.imu_rate", &c.pose_socket.imu_rate);
+  s.real("pose_socket.health_interval_s", &c.pose_socket.health_interval_s, 0.05, 3600.0);
+  s.real("pose_socket.health_log_interval_s", &c.pose_socket.health_log_interval_s, 0.0, 86400.0);
   return s;
 }
 
@@ -233,8 +343,24 @@ void validate_relations(const Config& c, const std::string& origin) {
   if (c.odometry.max_range_m <= c.odometry.min_range_m) {
     reject("odometry.max_range_m", c.odometry.max_range_m, "must exceed odometry.min_range_m");
   }
+  if (c.odometry.max_correspondence_m > c.odometry.map_voxel_m) {
+    reject("odometry.max_correspondence_m", c.odometry.max_correspondence_m,
+           "must not exceed odometry.map_voxel_m (neighbours are searched in the adjacent voxels)");
+  }
   if (c.odometry.plane_curvature >= c.odometry.edge_curvature) {
     reject("odometry.plane_curvature", c.odometry.plane_curvature, "must be below odometry.edge_curvature");
+  }
+  {
+    // The socket mode is written in octal as in chmod; only permission bits are allowed.
+    const std::string& m = c.pose_socket.mode;
+    const bool octal = !m.empty() && m.size() <= 4 && m.find_first_not_of("01234567") == std::string::npos;
+    if (!octal) {
+      throw ConfigError(origin + ": key 'pose_socket.mode' = '" + m + "': must be octal permission bits, e.g. 0660");
+    }
+  }
+  if (c.drivers.imu.transport == ImuTransport::kCan && c.drivers.imu.can_profile == CanProfile::kTable &&
+      c.drivers.imu.can_signals.empty()) {
+    throw ConfigError(origin + ": key 'drivers.imu.can_signals' = '[]': the table profile needs at least one signal");
   }
   static const char* kLevels[] = {"trace", "debug", "info", "warn", "error", "critical", "off"};
   bool level_ok = false;

@@ -29,6 +29,7 @@ void FeatureExtractor::extract(const Scan& scan, ScanFeatures& out) {
     const float r = std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
     range_[i] = r;
     if (!std::isfinite(r) || r < min_range || r > max_range || p.ring >= rings_.size()) continue;
+    if (params_.self_crop && params_.self_crop->contains(Eigen::Vector3f(p.x, p.y, p.z))) continue;
     rings_[p.ring].push_back(i);
   }
   for (const auto& ring : rings_) process_ring(scan, ring, out);

@@ -22,7 +22,7 @@ constexpr double kDegToRad = M_PI / 180.0;
 // While the speed is this uncertain, the deskew of the first scans is unreliable (rolling start).
 constexpr double kTrustedVelocityStd = 0.3;
 
-FeatureParams feature_params(const OdometryConfig& o) {
+FeatureParams feature_params(const OdometryConfig& o, const ExtrinsicsConfig& extrinsics) {
   FeatureParams p;
   p.neighbourhood = o.curvature == CurvatureMode::kAdaptive ? CurvatureNeighbourhood::kDistanceAdaptive
                                                              : CurvatureNeighbourhood::kFixed;
@@ -33,6 +33,14 @@ FeatureParams feature_params(const OdometryConfig& o) {
   p.plane_curvature = o.plane_curvature;
   p.sectors_per_ring = o.sectors_per_ring;
   p.max_edges_per_sector = o.max_edges_per_sector;
+  if ((o.crop_box_min_m.array() < o.crop_box_max_m.array()).all()) {
+    CropBox box;
+    box.sensor_to_body.linear() = extrinsics.lidar_to_imu_rotation.toRotationMatrix().cast<float>();
+    box.sensor_to_body.translation() = extrinsics.lidar_to_imu_translation.cast<float>();
+    box.min = o.crop_box_min_m.cast<float>();
+    box.max = o.crop_box_max_m.cast<float>();
+    p.self_crop = box;
+  }
   return p;
 }
 
@@ -52,7 +60,7 @@ LidarInertialOdometry::LidarInertialOdometry(const Config& config)
       extrinsics_(config.extrinsics),
       lidar_to_imu_{config.extrinsics.lidar_to_imu_rotation, config.extrinsics.lidar_to_imu_translation},
       gravity_(0.0, 0.0, -config.imu.gravity_m_s2),
-      extractor_(feature_params(config.odometry)),
+      extractor_(feature_params(config.odometry, config.extrinsics)),
       plane_map_(config.odometry.map_voxel_m, config.odometry.map_points_per_voxel, config.odometry.map_min_point_spacing_m),
       edge_map_(config.odometry.map_voxel_m, config.odometry.map_points_per_voxel, config.odometry.map_min_point_spacing_m) {
   noise_.gyro_noise_density = config.imu.gyro_noise_density;
@@ -136,7 +144,8 @@ PoseTable LidarInertialOdometry::deskew_trajectory(const Scan& scan, const NavSt
   return table;
 }
 
-void LidarInertialOdometry::deskew_features(const Scan& scan, const PoseTable& relative, Features& out) {
+void LidarInertialOdometry::deskew_features(const Scan& scan, const ScanFeatures& indices, const PoseTable& relative,
+                                            Features& out) const {
   const double t0 = scan.start_time + extrinsics_.lidar_time_offset_s;
   auto to_end_frame = [&](std::uint32_t index) {
     const LidarPoint& p = scan.points[index];
@@ -144,12 +153,14 @@ void LidarInertialOdometry::deskew_features(const Scan& scan, const PoseTable& r
     return relative.at(t0 + static_cast<double>(p.time)) * in_imu;
   };
   std::vector<Eigen::Vector3d> planes;
-  planes.reserve(scan_features_.planes.size());
-  for (auto i : scan_features_.planes) planes.push_back(to_end_frame(i));
+  planes.reserve(indices.planes.size());
+  for (auto i : indices.planes) planes.push_back(to_end_frame(i));
   std::vector<Eigen::Vector3d> edges;
-  edges.reserve(scan_features_.edges.size());
-  for (auto i : scan_features_.edges) edges.push_back(to_end_frame(i));
+  edges.reserve(indices.edges.size());
+  for (auto i : indices.edges) edges.push_back(to_end_frame(i));
   out.planes = voxel_downsample(planes, config_.odometry.plane_voxel_m);
+  // The map keeps planes denser than the queries so that each query finds a tight neighbourhood.
+  out.map_planes = voxel_downsample(planes, std::max(config_.odometry.map_min_point_spacing_m, 0.05));
   out.edges = voxel_downsample(edges, config_.odometry.edge_voxel_m);
 }
 
@@ -168,6 +179,7 @@ void LidarInertialOdometry::initialize(const Scan& scan, OdometryResult& result)
   covariance_.diagonal().segment<3>(3).setConstant(1e-6);                    // so does the origin
   const double v_std = alignment->stationary ? 0.05 : o.init_velocity_std;
   covariance_.diagonal().segment<3>(6).setConstant(v_std * v_std);
+  if (!alignment->stationary) first_scan_ = scan;  // its speed is found with the next scan
   covariance_.diagonal().segment<3>(9).setConstant(o.init_gyro_bias_std * o.init_gyro_bias_std);
   covariance_.diagonal().segment<3>(12).setConstant(o.init_accel_bias_std * o.init_accel_bias_std);
   initialized_ = true;
@@ -181,9 +193,102 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
   if (!initialized_) {
     initialize(scan, result);
     if (!initialized_) return std::nullopt;
+    if (first_scan_) {
+      // Rolling start: report the attitude only; the pose follows once the speed is known.
+      result.state = state_;
+      result.covariance = covariance_;
+      return result;
+    }
   }
+  if (first_scan_) {
+    const Scan first = std::move(*first_scan_);
+    first_scan_.reset();
+    if (initialize_velocity(first, scan)) {
+      process_scan(first, result);  // becomes the first keyframe
+      result = OdometryResult{};
+      result.points = scan.points.size();
+      result.status |= kStatusInitializing;
+    }
+  }
+  if (!(scan_end_time(scan) > state_.time)) return std::nullopt;  // a scan from the past (clock jump)
+  process_scan(scan, result);
+  return result;
+}
+
+bool LidarInertialOdometry::initialize_velocity(const Scan& first, const Scan& second) {
+  // A vehicle that is already moving: try horizontal velocities, deskew both scans with each and
+  // keep the one under which the second scan lies best on the first (most point-to-plane
+  // inliers). Both scans are deskewed consistently, so the winner is the true speed, not merely
+  // the one that smears the second scan like the first.
+  ScanFeatures first_features;
+  ScanFeatures second_features;
+  extractor_.extract(first, first_features);
+  extractor_.extract(second, second_features);
+  const NavState base = state_;
+  const auto intervals = imu_intervals(imu_, base.time, scan_end_time(second));
+  CorrespondenceParams gate = update_params_.correspondence;
+  auto score = [&](const Eigen::Vector3d& velocity) {
+    NavState start = base;
+    start.velocity = velocity;
+    const PoseTable world = integrate_imu_poses(start, intervals, gravity_);
+    Features a;
+    Features b;
+    deskew_features(first, first_features, world, a);
+    deskew_features(second, second_features, world, b);
+    LocalMap map(config_.odometry.map_voxel_m, config_.odometry.map_points_per_voxel,
+                 config_.odometry.map_min_point_spacing_m);
+    map.add(a.map_planes, 0);
+    const std::size_t stride = std::max<std::size_t>(1, b.planes.size() / 600);
+    int inliers = 0;
+    for (std::size_t i = 0; i < b.planes.size(); i += stride) {
+      const auto plane = plane_correspondence(map, b.planes[i], gate);
+      if (plane && std::abs(plane->evaluate(b.planes[i])) < 0.1) ++inliers;
+    }
+    return inliers;
+  };
+  auto horizontal = [](double speed, double heading) {
+    return Eigen::Vector3d(speed * std::cos(heading), speed * std::sin(heading), 0.0);
+  };
+  double best_speed = 0.0;
+  double best_heading = 0.0;
+  int best = score(Eigen::Vector3d::Zero());
+  constexpr int kHeadings = 12;
+  for (int h = 0; h < kHeadings; ++h) {
+    for (double speed = 2.0; speed <= 30.0; speed += 2.0) {
+      const double heading = 2.0 * M_PI * h / kHeadings;
+      const int inliers = score(horizontal(speed, heading));
+      if (inliers > best) {
+        best = inliers;
+        best_speed = speed;
+        best_heading = heading;
+      }
+    }
+  }
+  const double coarse_speed = best_speed;
+  const double coarse_heading = best_heading;
+  for (double dh : {-10.0, -5.0, 0.0, 5.0, 10.0}) {
+    for (double ds : {-1.0, -0.5, 0.0, 0.5, 1.0}) {
+      if (coarse_speed + ds < 0.0 || (dh == 0.0 && ds == 0.0)) continue;
+      const int inliers = score(horizontal(coarse_speed + ds, coarse_heading + dh * kDegToRad));
+      if (inliers > best) {
+        best = inliers;
+        best_speed = coarse_speed + ds;
+        best_heading = coarse_heading + dh * kDegToRad;
+      }
+    }
+  }
+  constexpr int kMinInliers = 50;
+  if (best < kMinInliers) return false;  // no structure to tell: stay with the wide prior
+  state_.velocity = horizontal(best_speed, best_heading);
+  // Within the search grid's resolution; the filter refines it from here.
+  covariance_.block<3, 3>(6, 6) = Eigen::Matrix3d::Identity();
+  covariance_.block<3, 3>(6, 0).setZero();
+  covariance_.block<3, 3>(0, 6).setZero();
+  return true;
+}
+
+void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& result) {
   const double t_end = scan_end_time(scan);
-  if (!(t_end > state_.time)) return std::nullopt;  // a scan from the past (clock jump): skip it
   if (latest_imu_time() < t_end - config_.imu.max_gap_s) result.status |= kStatusImuGap;
 
   auto t = Clock::now();
@@ -202,7 +307,7 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
   result.features_ms = elapsed_ms(t);
   t = Clock::now();
   Features features;
-  deskew_features(scan, relative, features);
+  deskew_features(scan, scan_features_, relative, features);
   result.deskew_ms += elapsed_ms(t);
   result.edge_features = features.edges.size();
   result.plane_features = features.planes.size();
@@ -221,7 +326,7 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
       corrected_start.velocity = update.state.velocity - gravity_ * preintegration.duration() -
                                  start.rotation * preintegration.delta_velocity(start.gyro_bias, start.accel_bias);
       relative = deskew_trajectory(scan, corrected_start, preintegration.predict(corrected_start, gravity_), intervals);
-      deskew_features(scan, relative, features);
+      deskew_features(scan, scan_features_, relative, features);
       update = iterated_update(predicted, predicted_covariance, features.planes, plane_map_, features.edges, edge_map_,
                                update_params_);
     }
@@ -256,7 +361,6 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
   while (imu_.size() > 2 && imu_[1].time < state_.time - 0.5) imu_.pop_front();
   result.state = state_;
   result.covariance = covariance_;
-  return result;
 }
 
 void LidarInertialOdometry::consider_keyframe(const Features& features, OdometryResult& result) {
@@ -286,9 +390,9 @@ void LidarInertialOdometry::add_keyframe(const Features& features) {
   Keyframe kf;
   kf.id = next_keyframe_id_++;
   kf.state = state_;
-  kf.planes_world = transformed(features.planes, state_);
+  kf.planes_world = transformed(features.map_planes, state_);
   kf.edges_world = transformed(features.edges, state_);
-  kf.similarity_cloud_world = kf.planes_world;
+  kf.similarity_cloud_world = transformed(features.planes, state_);
   kf.similarity_cloud_world.insert(kf.similarity_cloud_world.end(), kf.edges_world.begin(), kf.edges_world.end());
   kf.similarity_cloud_world = voxel_downsample(kf.similarity_cloud_world, config_.odometry.hausdorff_voxel_m);
   plane_map_.add(kf.planes_world, kf.id);

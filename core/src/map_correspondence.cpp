@@ -33,6 +33,10 @@ std::optional<LinearResidual> plane_correspondence(const LocalMap& map, const Ei
   const Moments m = moments(nn, n);
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
   eig.computeDirect(m.covariance);
+  // Neighbours along one scan ring are nearly collinear: every plane through that line fits them,
+  // so the normal would be arbitrary. Demand a real second dimension.
+  const Eigen::Vector3d ev = eig.eigenvalues();
+  if (ev(1) < params.min_plane_spread_ratio * params.min_plane_spread_ratio * ev(2)) return std::nullopt;
   const Eigen::Vector3d normal = eig.eigenvectors().col(0).normalized();
   const double offset = -normal.dot(m.mean);
   for (int i = 0; i < n; ++i) {

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -31,8 +32,8 @@ struct LidarConfig {
 
 struct ImuConfig {
   double rate_hz = 200.0;               // nominal rate; used to detect gaps
-  double gyro_noise_density = 2.0e-3;   // rad/s/sqrt(Hz)
-  double accel_noise_density = 2.0e-2;  // m/s^2/sqrt(Hz)
+  double gyro_noise_density = 5.0e-4;   // rad/s/sqrt(Hz)
+  double accel_noise_density = 5.0e-3;  // m/s^2/sqrt(Hz)
   double gyro_bias_random_walk = 5.0e-5;   // rad/s^2/sqrt(Hz)
   double accel_bias_random_walk = 1.0e-3;  // m/s^3/sqrt(Hz)
   double gravity_m_s2 = 9.80665;
@@ -51,7 +52,11 @@ struct OdometryConfig {
   DeskewMode deskew = DeskewMode::kImu;
   CurvatureMode curvature = CurvatureMode::kAdaptive;
   KeyframeGating keyframe_gating = KeyframeGating::kHausdorff;
-  double min_range_m = 2.0;          // self-crop: returns closer than this hit the vehicle
+  double min_range_m = 2.0;          // returns closer than this are not used
+  /// Self-crop: returns inside this box of the body (IMU) frame hit the vehicle itself.
+  /// Disabled while min is not below max on every axis.
+  Eigen::Vector3d crop_box_min_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d crop_box_max_m = Eigen::Vector3d::Zero();
   double max_range_m = 120.0;
   double occlusion_jump_m = 0.5;     // neighbour range jump that marks an occlusion edge (scaled by range)
   double edge_curvature = 0.2;       // c above this: edge candidate
@@ -65,7 +70,7 @@ struct OdometryConfig {
   double map_min_point_spacing_m = 0.2;
   int max_iterations = 5;
   double lidar_noise_m = 0.03;       // std of a point-to-plane/line residual
-  double max_correspondence_m = 1.5;
+  double max_correspondence_m = 1.0;
   double keyframe_distance_m = 1.0;
   double keyframe_angle_deg = 10.0;
   double hausdorff_threshold_m = 0.6; // h1
@@ -87,6 +92,91 @@ struct OutputConfig {
   std::string state_dir = "/var/lib/liod";
 };
 
+
+// ---- live daemon (issue 6): drivers, time, threads, pose socket ----------------------------
+struct LidarDriverConfig {
+  std::string bind_address = "0.0.0.0";   // local IPv4 address the MSOP/DIFOP sockets bind to
+  std::string multicast_group;             // "" = unicast; else an IPv4 group to join
+  std::string multicast_interface = "0.0.0.0";  // local address of the interface that joins the group
+  std::string source_address;              // "" = any sender; else only datagrams from this IPv4 address
+  int receive_buffer_bytes = 16 * 1024 * 1024;  // SO_RCVBUF(FORCE): 1 s of MSOP is ~1.9 MB
+  int batch = 64;                          // datagrams per recvmmsg call
+  double lost_after_s = 0.5;               // no sweep for this long flags "LiDAR lost"
+};
+
+enum class ImuTransport { kSerial, kCan, kFile, kNone };
+enum class CanProfile { kJ1939, kTable };
+
+/// One CAN signal of the `table` profile: a little/big-endian integer at a byte offset of a
+/// frame, value = raw * scale + offset, in the unit liod expects (rad/s or m/s^2).
+struct CanSignalConfig {
+  std::string quantity;      // gyro_x, gyro_y, gyro_z, accel_x, accel_y, accel_z
+  std::uint32_t can_id = 0;  // 11- or 29-bit identifier (compared after masking with id_mask)
+  std::uint32_t id_mask = 0x1FFFFFFF;
+  int byte_offset = 0;
+  int length_bytes = 2;      // 1, 2 or 4
+  bool big_endian = false;
+  bool is_signed = false;
+  double scale = 1.0;
+  double offset = 0.0;
+};
+
+struct ImuDriverConfig {
+  ImuTransport transport = ImuTransport::kSerial;
+  std::string serial_device = "/dev/ttyUSB0";  // Xsens MTi, MTData2 output
+  int serial_baud = 921600;
+  std::string can_interface = "can0";          // SocketCAN interface
+  CanProfile can_profile = CanProfile::kJ1939; // J1939 PGN 61482 (rate) + 61485 (acceleration)
+  int j1939_source_address = -1;               // -1 = any sender; else only this J1939 source address
+  std::vector<CanSignalConfig> can_signals;    // the `table` profile's layout
+  std::string file;                            // transport `file`: an IMU CSV played at `file_pace`
+  double file_pace = 1.0;                      // 1 = recorded pace
+  double lost_after_s = 0.1;                   // no sample for this long flags "IMU lost"
+};
+
+struct DriversConfig {
+  LidarDriverConfig lidar;
+  ImuDriverConfig imu;
+};
+
+enum class LidarClock { kAuto, kSensor, kHost };
+
+struct TimeConfig {
+  LidarClock lidar_clock = LidarClock::kAuto;  // auto: sensor time when DIFOP says PTP/GPS synced, else host
+  double offset_window_s = 2.0;     // host-sensor offset = minimum of (arrival - header) over this window
+  double jump_threshold_s = 0.1;    // an offset or host clock step beyond this is a clock jump
+  double imu_wait_s = 0.1;          // a scan waits at most this long (host time) for the IMU to reach its end
+  std::string pps_chip;             // "" = no PPS; else a GPIO chip name (e.g. gpiochip0)
+  int pps_line = 0;                 // line offset of the PPS input on that chip
+};
+
+struct ThreadConfig {
+  int priority = 0;  // 0 = normal scheduling; 1..99 = SCHED_FIFO priority (needs CAP_SYS_NICE)
+  int cpu = -1;      // -1 = any CPU; else pin to this CPU
+};
+
+struct ThreadsConfig {
+  ThreadConfig lidar{70, -1};
+  ThreadConfig imu{75, -1};
+  ThreadConfig odometry{60, -1};
+  ThreadConfig publisher{65, -1};
+  int backend_nice = 10;            // the backend runs SCHED_OTHER at this nice value
+  int scan_ring = 8;                // ring sizes (rounded up to powers of two)
+  int imu_ring = 4096;
+  int pose_ring = 4096;
+  int keyframe_ring = 64;
+};
+
+struct PoseSocketConfig {
+  std::string mode = "0660";        // permissions of the socket file (octal)
+  int max_clients = 32;
+  int client_buffer_bytes = 262144; // a client further behind than this skips messages
+  double stuck_timeout_s = 2.0;     // a client that accepts nothing for this long is disconnected
+  bool imu_rate = true;             // also publish IMU-rate poses
+  double health_interval_s = 1.0;   // health message period on the socket
+  double health_log_interval_s = 10.0;  // health line period in the log
+};
+
 struct Config {
   LogConfig log;
   LidarConfig lidar;
@@ -95,6 +185,10 @@ struct Config {
   OdometryConfig odometry;
   BackendConfig backend;
   OutputConfig output;
+  DriversConfig drivers;
+  TimeConfig time;
+  ThreadsConfig threads;
+  PoseSocketConfig pose_socket;
 };
 
 /// Thrown for any configuration problem; the message names the file, the key and the value.

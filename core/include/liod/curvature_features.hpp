@@ -3,7 +3,9 @@
 // neighbourhood: c = ||sum_{j in S} (X_i - X_j)|| / (|S| * ||X_i||), |S| = 10 / 8 / 6 / 4 for
 // ranges <= 10 / <= 20 / <= 30 / > 30 m (DESIGN.md, "Distance-adaptive curvature").
 
+#include <Eigen/Geometry>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "liod/types.hpp"
@@ -11,6 +13,17 @@
 namespace liod {
 
 enum class CurvatureNeighbourhood { kDistanceAdaptive, kFixed };
+
+/// An axis-aligned box in the vehicle (body) frame; sensor points are mapped into it first.
+struct CropBox {
+  Eigen::Isometry3f sensor_to_body = Eigen::Isometry3f::Identity();
+  Eigen::Vector3f min = Eigen::Vector3f::Zero();
+  Eigen::Vector3f max = Eigen::Vector3f::Zero();
+  bool contains(const Eigen::Vector3f& sensor_point) const {
+    const Eigen::Vector3f p = sensor_to_body * sensor_point;
+    return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
+  }
+};
 
 struct FeatureParams {
   CurvatureNeighbourhood neighbourhood = CurvatureNeighbourhood::kDistanceAdaptive;
@@ -21,6 +34,7 @@ struct FeatureParams {
   double plane_curvature = 0.05;
   int sectors_per_ring = 8;
   int max_edges_per_sector = 6;
+  std::optional<CropBox> self_crop;  // the vehicle's own body
 };
 
 /// |S| for a point at this range (both sides together).

@@ -79,13 +79,16 @@ class LidarInertialOdometry {
 
  private:
   struct Features {
-    std::vector<Eigen::Vector3d> planes;
+    std::vector<Eigen::Vector3d> planes;      // registration queries (sparse)
     std::vector<Eigen::Vector3d> edges;
+    std::vector<Eigen::Vector3d> map_planes;  // what a keyframe adds to the map (denser)
   };
   void initialize(const Scan& scan, OdometryResult& result);
+  bool initialize_velocity(const Scan& first, const Scan& second);
+  void process_scan(const Scan& scan, OdometryResult& result);
   PoseTable deskew_trajectory(const Scan& scan, const NavState& start, const NavState& predicted_end,
                               const std::vector<ImuInterval>& intervals) const;
-  void deskew_features(const Scan& scan, const PoseTable& relative, Features& out);
+  void deskew_features(const Scan& scan, const ScanFeatures& indices, const PoseTable& relative, Features& out) const;
   StateCovariance propagate_covariance(const ImuPreintegration& preintegration, const NavState& start) const;
   void consider_keyframe(const Features& features, OdometryResult& result);
   void add_keyframe(const Features& features);
@@ -103,6 +106,7 @@ class LidarInertialOdometry {
   std::size_t dropped_imu_ = 0;
   bool initialized_ = false;
   bool map_trusted_ = false;
+  std::optional<Scan> first_scan_;  // a rolling start's first scan, until the second gives the speed
   NavState state_;
   StateCovariance covariance_ = StateCovariance::Zero();
   Eigen::Vector3d last_angular_rate_ = Eigen::Vector3d::Zero();  // body frame, for constant-velocity deskew

@@ -25,8 +25,8 @@ class LocalMap {
   /// Removes every point that came from this keyframe.
   void remove_keyframe(const std::vector<Eigen::Vector3d>& points, std::uint64_t keyframe_id);
 
-  /// The k nearest map points within max_distance of the query, nearest first; returns how many
-  /// were found (<= k <= kMaxNeighbours).
+  /// The k nearest map points within max_distance (<= the voxel size) of the query, nearest
+  /// first; returns how many were found (<= k <= kMaxNeighbours).
   int nearest(const Eigen::Vector3d& query, int k, double max_distance,
               std::array<Eigen::Vector3d, kMaxNeighbours>& out) const;
 

@@ -20,6 +20,7 @@ struct CorrespondenceParams {
   int neighbours = 5;
   double max_distance_m = 1.5;
   double max_plane_thickness_m = 0.1;  // every neighbour within this of the fitted plane
+  double min_plane_spread_ratio = 0.2; // second / largest spread (std) of the neighbours, against collinear ones
   double min_line_ratio = 3.0;         // largest / second eigenvalue for a line
 };
 
