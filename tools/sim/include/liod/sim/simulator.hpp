@@ -1,0 +1,84 @@
+#pragma once
+// One simulated drive: the scene, the true trajectory, the sensor mounting and models, built
+// deterministically from the configuration, and the writer of the run's files.
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "liod/sim/drive.hpp"
+#include "liod/sim/imu_model.hpp"
+#include "liod/sim/lidar_model.hpp"
+#include "liod/sim/scene.hpp"
+#include "liod/sim/trajectory.hpp"
+
+namespace liod::sim {
+
+inline constexpr const char* kSimVersion = "1.0.0";
+
+struct SimConfig {
+  SceneRequest scene;
+  double imu_rate = 200.0;
+  bool noise = true;          // false: exact IMU, no LiDAR range noise/bias/angle error
+  bool dual_return = false;
+  bool ego_body = true;       // the LiDAR sees the roof and bonnet of its own car
+  int threads = 2;
+  std::string angles_csv;
+  std::string out_dir;
+  std::int64_t epoch_s = 1700000000;  // IMU-clock time of the run's t = 0 (UTC seconds)
+};
+
+struct RunReport {
+  std::uint64_t msop_packets = 0;
+  std::uint64_t difop_packets = 0;
+  std::uint64_t returns = 0;
+  std::uint64_t rays = 0;
+  std::uint64_t imu_samples = 0;
+};
+
+class Simulation {
+ public:
+  explicit Simulation(SimConfig config);
+
+  /// Writes lidar.pcap, imu.csv, groundtruth.tum, extrinsics.yaml and scenario.yaml into out_dir.
+  RunReport write_all(const std::function<void(double)>& progress = {}) const;
+  /// Only the LiDAR capture (used by the benchmark).
+  RunReport write_lidar(const std::string& path, const std::function<void(double)>& progress = {}) const;
+
+  const SimConfig& config() const { return config_; }
+  const Scene& scene() const { return scene_; }
+  const Trajectory& trajectory() const { return *trajectory_; }
+  const LidarModel& lidar() const { return *lidar_; }
+  const EgoBody& ego() const { return ego_; }
+  const DriveStats& drive_stats() const { return stats_; }
+  /// p_imu = R p_lidar + t.
+  const Pose& imu_from_lidar() const { return imu_from_lidar_; }
+  /// t_imu = t_lidar + offset.
+  double time_offset() const { return time_offset_; }
+  /// World pose of the LiDAR at IMU-clock time t (seconds after the run's start).
+  Pose lidar_pose(double t) const;
+
+ private:
+  void write_imu_and_truth(RunReport& report) const;
+  void write_yaml(const RunReport& report) const;
+
+  SimConfig config_;
+  Scene scene_;
+  std::unique_ptr<Trajectory> trajectory_;
+  std::unique_ptr<LidarModel> lidar_;
+  EgoBody ego_;
+  DriveStats stats_;
+  Pose imu_from_lidar_;
+  double time_offset_ = 0.0;
+  VehicleParams vehicle_;
+  LidarParams lidar_params_;
+  LidarNoise lidar_noise_;
+  ImuNoise imu_noise_;
+  int az_start_step_ = 0;
+};
+
+/// "1700000012.345678901" from an integer epoch and a relative time, without double rounding.
+std::string format_time(std::int64_t epoch_s, double t);
+
+}  // namespace liod::sim

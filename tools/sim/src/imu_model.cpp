@@ -1,0 +1,71 @@
+#include "liod/sim/imu_model.hpp"
+
+#include <cmath>
+#include <numbers>
+
+namespace liod::sim {
+
+namespace {
+constexpr double kDeg = std::numbers::pi / 180.0;
+}
+
+ImuReading ideal_imu(const BodyState& s) {
+  ImuReading r;
+  r.gyro = s.angular_velocity;
+  r.accel = s.rotation.transpose() * (s.acceleration + Eigen::Vector3d(0.0, 0.0, kGravity));
+  return r;
+}
+
+ImuModel::ImuModel(const ImuNoise& noise, double rate_hz, std::uint64_t seed)
+    : noise_(noise), dt_(1.0 / rate_hz), rng_(seed) {
+  for (int i = 0; i < 3; ++i) {
+    gyro_bias0_[i] = rng_.sign() * rng_.uniform(noise.gyro_turn_on_min, noise.gyro_turn_on_max) * kDeg;
+    accel_bias0_[i] = rng_.sign() * rng_.uniform(noise.accel_turn_on_min, noise.accel_turn_on_max);
+  }
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      gyro_m_(i, j) += i == j ? rng_.gaussian(noise.gyro_scale_sigma) : rng_.gaussian(noise.misalignment_sigma);
+      accel_m_(i, j) += i == j ? rng_.gaussian(noise.accel_scale_sigma) : rng_.gaussian(noise.misalignment_sigma);
+    }
+  }
+  gyro_gm_ = gaussian3(noise.gyro_bias_instability);
+  accel_gm_ = gaussian3(noise.accel_bias_instability);
+  if (!noise.enabled) {
+    gyro_bias0_.setZero();
+    accel_bias0_.setZero();
+    gyro_m_.setIdentity();
+    accel_m_.setIdentity();
+    gyro_gm_.setZero();
+    accel_gm_.setZero();
+  }
+}
+
+Eigen::Vector3d ImuModel::gaussian3(double sigma) {
+  const double x = rng_.gaussian(sigma);
+  const double y = rng_.gaussian(sigma);
+  const double z = rng_.gaussian(sigma);
+  return {x, y, z};
+}
+
+ImuReading ImuModel::measure(const BodyState& state) {
+  const ImuReading ideal = ideal_imu(state);
+  if (!noise_.enabled) {
+    return ideal;
+  }
+  ImuReading r;
+  r.gyro = gyro_m_ * ideal.gyro + gyro_bias0_ + gyro_rw_ + gyro_gm_ +
+           gaussian3(noise_.gyro_noise_density / std::sqrt(dt_));
+  r.accel = accel_m_ * ideal.accel + accel_bias0_ + accel_rw_ + accel_gm_ +
+            gaussian3(noise_.accel_noise_density / std::sqrt(dt_));
+  // Advance the slow error states to the next sample.
+  const double tau = noise_.bias_correlation_time;
+  const double phi = std::exp(-dt_ / tau);
+  const double q = std::sqrt(1.0 - phi * phi);
+  gyro_rw_ += gaussian3(noise_.gyro_bias_random_walk * std::sqrt(dt_));
+  accel_rw_ += gaussian3(noise_.accel_bias_random_walk * std::sqrt(dt_));
+  gyro_gm_ = phi * gyro_gm_ + gaussian3(noise_.gyro_bias_instability * q);
+  accel_gm_ = phi * accel_gm_ + gaussian3(noise_.accel_bias_instability * q);
+  return r;
+}
+
+}  // namespace liod::sim
