@@ -40,7 +40,8 @@ for route in $routes; do
       overlay=${v#*|}
       tag=$(echo "$name" | tr -c 'a-zA-Z0-9' '_')
       printf '%s\n' "$overlay" > "$drive/variant_$tag.yaml"
-      "$bin/liod" --log-level warn replay --no-progress --config config/liod.yaml --config "$drive/extrinsics.yaml" \
+      "$bin/liod" --log-level warn replay --no-progress --config config/liod.yaml --config config/vehicles/liod-sim-car.yaml \
+        --config "$drive/extrinsics.yaml" \
         --config "$drive/variant_$tag.yaml" --pcap "$drive/lidar.pcap" --imu "$drive/imu.csv" \
         --trajectory "$drive/est_$tag.tum" > "$drive/replay_$tag.txt"
       timing=$(grep -o 'median [0-9.]* ms, p99 [0-9.]* ms' "$drive/replay_$tag.txt" | awk '{print $2" / "$5}')

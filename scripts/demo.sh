@@ -25,7 +25,7 @@ mkdir -p "$out"
 echo "== simulating a ${duration} s ${route} drive (seed ${seed}, up to ${speed} m/s) into ${out}"
 build/bin/liod-sim --route "$route" --seed "$seed" --duration "$duration" --max-speed "$speed" --out "$out"
 echo "== replaying it through liod"
-build/bin/liod replay --config config/liod.yaml --config "$out/extrinsics.yaml" \
+build/bin/liod replay --config config/liod.yaml --config config/vehicles/liod-sim-car.yaml --config "$out/extrinsics.yaml" \
   --pcap "$out/lidar.pcap" --imu "$out/imu.csv" --trajectory "$out/liod.tum" --scan-log "$out/scans.csv"
 echo "== accuracy against the ground truth"
 build/bin/liod-eval --gt "$out/groundtruth.tum" --est "$out/liod.tum" --plot "$out/trajectory.png"

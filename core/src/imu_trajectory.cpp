@@ -62,7 +62,13 @@ Pose PoseTable::at(double time) const {
   const double s = (time - times_[k - 1]) / (times_[k] - times_[k - 1]);
   const Pose& a = poses_[k - 1];
   const Pose& b = poses_[k];
-  return {a.rotation.slerp(s, b.rotation), (1.0 - s) * a.translation + s * b.translation};
+  // Normalised linear interpolation: between IMU samples the rotation changes by well under a
+  // degree, where it equals slerp to ~1e-9 rad and costs no trigonometry.
+  Eigen::Quaterniond q_b = b.rotation;
+  if (a.rotation.dot(q_b) < 0.0) q_b.coeffs() = -q_b.coeffs();
+  Eigen::Quaterniond q;
+  q.coeffs() = (1.0 - s) * a.rotation.coeffs() + s * q_b.coeffs();
+  return {q.normalized(), (1.0 - s) * a.translation + s * b.translation};
 }
 
 void PoseTable::make_relative_to(const Pose& reference) {

@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <optional>
 
 #include "liod/so3.hpp"
 
@@ -45,13 +46,21 @@ double huber_weight(double r, double k) {
   return a <= k ? 1.0 : k / a;
 }
 
+using Correspondences = std::vector<std::optional<LinearResidual>>;
+
+// With `search` the map is queried afresh; otherwise the planes/lines found last time are kept
+// (re-linearised at the new pose), which is what makes later iterations cheap.
 template <typename Correspond>
 void accumulate(const std::vector<Eigen::Vector3d>& points_body, const NavState& x, const LocalMap& map,
-                const UpdateParams& params, Correspond correspond, Normal6& eq) {
+                const UpdateParams& params, Correspond correspond, bool search, Correspondences& cache,
+                Normal6& eq) {
   const double k = 2.0 * params.lidar_noise_m;
-  for (const auto& pb : points_body) {
+  cache.resize(points_body.size());
+  for (std::size_t i = 0; i < points_body.size(); ++i) {
+    const Eigen::Vector3d& pb = points_body[i];
     const Eigen::Vector3d q = x.rotation * pb + x.position;
-    const auto residual = correspond(map, q, params.correspondence);
+    if (search) cache[i] = correspond(map, q, params.correspondence);
+    const auto& residual = cache[i];
     if (!residual || residual->normal.isZero()) continue;
     const double r = residual->evaluate(q);
     // d q / d dtheta = -R [pb]x  (right perturbation), d q / d p = I.
@@ -78,15 +87,37 @@ UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior
   NavState x = prior;
   Normal6 eq;
   StateCovariance information = prior_information;
+  Correspondences plane_cache;
+  Correspondences edge_cache;
+  NavState searched_at = x;
+  int degenerate_directions = 0;
   for (int iteration = 0; iteration < params.max_iterations; ++iteration) {
+    // Search again while the pose still moves noticeably since the last search.
+    const Vector15 moved = boxminus(x, searched_at);
+    const bool search = iteration < 2 || moved.segment<3>(0).norm() > params.research_rotation_rad ||
+                        moved.segment<3>(3).norm() > params.research_translation_m;
+    if (search) searched_at = x;
     eq = Normal6{};
-    accumulate(planes_body, x, plane_map, params, plane_correspondence, eq);
-    if (!edge_map.empty()) accumulate(edges_body, x, edge_map, params, line_correspondence, eq);
+    accumulate(planes_body, x, plane_map, params, plane_correspondence, search, plane_cache, eq);
+    if (!edge_map.empty()) accumulate(edges_body, x, edge_map, params, line_correspondence, search, edge_cache, eq);
+    // Degeneracy (Zhang, Kaess, Singh, ICRA 2016): along directions the scene hardly constrains
+    // (a tunnel's axis), the LiDAR's few, slightly biased normals would push the pose without
+    // information to back it. Remove the LiDAR from those directions; the IMU prior holds them.
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(eq.hessian);
+    Eigen::Matrix<double, 6, 6> projector = Eigen::Matrix<double, 6, 6>::Zero();
+    degenerate_directions = 0;
+    for (int i = 0; i < 6; ++i) {
+      if (eig.eigenvalues()(i) >= params.degeneracy_eigenvalue) {
+        projector += eig.eigenvectors().col(i) * eig.eigenvectors().col(i).transpose();
+      } else {
+        ++degenerate_directions;
+      }
+    }
     // MAP step: (P^-1 + H^T W H) delta = -H^T W r - P^-1 (x (-) prior)   (iterated EKF).
     information = prior_information;
-    information.topLeftCorner<6, 6>() += inv_var * eq.hessian;
+    information.topLeftCorner<6, 6>() += inv_var * projector * eq.hessian * projector;
     Vector15 rhs = -prior_information * boxminus(x, prior);
-    rhs.head<6>() -= inv_var * eq.gradient;
+    rhs.head<6>() -= inv_var * projector * eq.gradient;
     const Vector15 delta = information.ldlt().solve(rhs);
     if (!delta.allFinite()) break;
     x = boxplus(x, delta);
@@ -102,6 +133,7 @@ UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> rotation(eq.hessian.topLeftCorner<3, 3>(), Eigen::EigenvaluesOnly);
   result.min_translation_eigenvalue = translation.eigenvalues()(0);
   result.min_rotation_eigenvalue = rotation.eigenvalues()(0);
+  result.degenerate_directions = degenerate_directions;
   return result;
 }
 

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <unordered_set>
 
 #include "liod/gravity_alignment.hpp"
 #include "liod/hausdorff.hpp"
@@ -70,6 +71,7 @@ LidarInertialOdometry::LidarInertialOdometry(const Config& config)
   update_params_.max_iterations = config.odometry.max_iterations;
   update_params_.lidar_noise_m = config.odometry.lidar_noise_m;
   update_params_.correspondence.max_distance_m = config.odometry.max_correspondence_m;
+  update_params_.degeneracy_eigenvalue = config.odometry.degeneracy_eigenvalue;
 }
 
 void LidarInertialOdometry::add_imu(const ImuSample& sample) {
@@ -147,20 +149,30 @@ PoseTable LidarInertialOdometry::deskew_trajectory(const Scan& scan, const NavSt
 void LidarInertialOdometry::deskew_features(const Scan& scan, const ScanFeatures& indices, const PoseTable& relative,
                                             Features& out) const {
   const double t0 = scan.start_time + extrinsics_.lidar_time_offset_s;
-  auto to_end_frame = [&](std::uint32_t index) {
+  const double inverse_map_spacing = 1.0 / std::max(config_.odometry.map_min_point_spacing_m, 0.05);
+  // Thin the candidates on their raw coordinates first, so that only the survivors pay for the
+  // per-point pose (a voxel shifts by less than the motion blur, which is all that changes).
+  std::unordered_set<VoxelKey, VoxelKeyHash> occupied;
+  occupied.reserve(indices.planes.size());
+  std::vector<Eigen::Vector3d> planes;
+  planes.reserve(indices.planes.size() / 2);
+  auto deskewed = [&](std::uint32_t index) {
     const LidarPoint& p = scan.points[index];
     const Eigen::Vector3d in_imu = lidar_to_imu_ * Eigen::Vector3d(p.x, p.y, p.z);
     return relative.at(t0 + static_cast<double>(p.time)) * in_imu;
   };
-  std::vector<Eigen::Vector3d> planes;
-  planes.reserve(indices.planes.size());
-  for (auto i : indices.planes) planes.push_back(to_end_frame(i));
+  for (auto i : indices.planes) {
+    const LidarPoint& p = scan.points[i];
+    if (occupied.insert(voxel_of(Eigen::Vector3d(p.x, p.y, p.z), inverse_map_spacing)).second) {
+      planes.push_back(deskewed(i));
+    }
+  }
   std::vector<Eigen::Vector3d> edges;
   edges.reserve(indices.edges.size());
-  for (auto i : indices.edges) edges.push_back(to_end_frame(i));
-  out.planes = voxel_downsample(planes, config_.odometry.plane_voxel_m);
+  for (auto i : indices.edges) edges.push_back(deskewed(i));
   // The map keeps planes denser than the queries so that each query finds a tight neighbourhood.
-  out.map_planes = voxel_downsample(planes, std::max(config_.odometry.map_min_point_spacing_m, 0.05));
+  out.map_planes = planes;
+  out.planes = voxel_downsample(planes, config_.odometry.plane_voxel_m);
   out.edges = voxel_downsample(edges, config_.odometry.edge_voxel_m);
 }
 
@@ -337,7 +349,7 @@ void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& resul
     result.iterations = update.iterations;
     result.rms_residual_m = update.rms_residual_m;
     result.min_translation_eigenvalue = update.min_translation_eigenvalue;
-    if (update.min_translation_eigenvalue < config_.odometry.degeneracy_eigenvalue) result.status |= kStatusDegenerate;
+    if (update.degenerate_directions > 0) result.status |= kStatusDegenerate;
     if (update.residuals < 50) result.status |= kStatusFewFeatures;
   }
   result.registration_ms = elapsed_ms(t);

@@ -6,79 +6,169 @@
 namespace liod {
 
 LocalMap::LocalMap(double voxel_size, int max_points_per_voxel, double min_point_spacing)
-    : voxel_size_(voxel_size),
-      inverse_voxel_size_(1.0 / voxel_size),
-      max_points_per_voxel_(static_cast<std::size_t>(max_points_per_voxel)),
-      min_spacing_squared_(min_point_spacing * min_point_spacing) {}
+    : inverse_voxel_size_(1.0 / voxel_size),
+      max_points_per_voxel_(static_cast<std::uint32_t>(std::clamp(max_points_per_voxel, 1, kMaxPointsPerVoxel))),
+      min_spacing_squared_(static_cast<float>(min_point_spacing * min_point_spacing)),
+      slots_(1024, kEmpty) {}
+
+std::int32_t LocalMap::find_index(const VoxelKey& key) const {
+  const std::size_t mask = slots_.size() - 1;
+  for (std::size_t i = slot_of(key);; i = (i + 1) & mask) {
+    const std::int32_t v = slots_[i];
+    if (v == kEmpty) return kEmpty;
+    if (v >= 0 && voxels_[static_cast<std::size_t>(v)].key == key) return v;
+  }
+}
+
+const LocalMap::Voxel* LocalMap::find(const VoxelKey& key) const {
+  const std::int32_t v = find_index(key);
+  return v < 0 ? nullptr : &voxels_[static_cast<std::size_t>(v)];
+}
+
+LocalMap::Voxel& LocalMap::find_or_insert(const VoxelKey& key) {
+  if (2 * (used_slots_ + 1) > slots_.size()) {
+    // Half full of live voxels and tombstones: grow if the live ones alone fill a quarter,
+    // otherwise just sweep the tombstones out.
+    const std::size_t live = voxels_.size() - free_voxels_.size();
+    rehash(4 * live > slots_.size() ? 2 * slots_.size() : slots_.size());
+  }
+  const std::size_t mask = slots_.size() - 1;
+  std::size_t reusable = slots_.size();
+  for (std::size_t i = slot_of(key);; i = (i + 1) & mask) {
+    const std::int32_t v = slots_[i];
+    if (v == kDeleted && reusable == slots_.size()) reusable = i;
+    if (v >= 0 && voxels_[static_cast<std::size_t>(v)].key == key) return voxels_[static_cast<std::size_t>(v)];
+    if (v == kEmpty) {
+      std::int32_t index;
+      if (!free_voxels_.empty()) {
+        index = free_voxels_.back();
+        free_voxels_.pop_back();
+      } else {
+        index = static_cast<std::int32_t>(voxels_.size());
+        voxels_.emplace_back();
+      }
+      Voxel& voxel = voxels_[static_cast<std::size_t>(index)];
+      voxel.key = key;
+      voxel.count = 0;
+      if (reusable != slots_.size()) {
+        slots_[reusable] = index;
+      } else {
+        slots_[i] = index;
+        ++used_slots_;
+      }
+      return voxel;
+    }
+  }
+}
+
+void LocalMap::erase(const VoxelKey& key) {
+  const std::size_t mask = slots_.size() - 1;
+  for (std::size_t i = slot_of(key);; i = (i + 1) & mask) {
+    const std::int32_t v = slots_[i];
+    if (v == kEmpty) return;
+    if (v >= 0 && voxels_[static_cast<std::size_t>(v)].key == key) {
+      slots_[i] = kDeleted;  // a tombstone keeps later probes of other keys intact
+      free_voxels_.push_back(v);
+      return;
+    }
+  }
+}
+
+void LocalMap::rehash(std::size_t capacity) {
+  std::vector<std::int32_t> old = std::move(slots_);
+  slots_.assign(capacity, kEmpty);
+  used_slots_ = 0;
+  const std::size_t mask = capacity - 1;
+  for (const std::int32_t v : old) {
+    if (v < 0) continue;
+    std::size_t i = slot_of(voxels_[static_cast<std::size_t>(v)].key);
+    while (slots_[i] != kEmpty) i = (i + 1) & mask;
+    slots_[i] = v;
+    ++used_slots_;
+  }
+}
 
 void LocalMap::add(const std::vector<Eigen::Vector3d>& points, std::uint64_t keyframe_id) {
+  const auto tag = static_cast<std::uint32_t>(keyframe_id);
   for (const auto& p : points) {
-    Voxel& voxel = voxels_[voxel_of(p, inverse_voxel_size_)];
-    if (voxel.size() >= max_points_per_voxel_) continue;
-    const bool crowded = std::any_of(voxel.begin(), voxel.end(), [&](const Entry& e) {
-      return (e.point - p).squaredNorm() < min_spacing_squared_;
-    });
+    Voxel& voxel = find_or_insert(voxel_of(p, inverse_voxel_size_));
+    if (voxel.count >= max_points_per_voxel_) continue;
+    const Eigen::Vector3f pf = p.cast<float>();
+    bool crowded = false;
+    for (std::uint32_t i = 0; i < voxel.count && !crowded; ++i) {
+      crowded = (voxel.points[i] - pf).squaredNorm() < min_spacing_squared_;
+    }
     if (crowded) continue;
-    if (voxel.empty()) voxel.reserve(max_points_per_voxel_);
-    voxel.push_back({p, keyframe_id});
+    voxel.points[voxel.count] = pf;
+    voxel.keyframes[voxel.count] = tag;
+    ++voxel.count;
     ++point_count_;
   }
 }
 
 void LocalMap::remove_keyframe(const std::vector<Eigen::Vector3d>& points, std::uint64_t keyframe_id) {
+  const auto tag = static_cast<std::uint32_t>(keyframe_id);
   for (const auto& p : points) {
-    const auto it = voxels_.find(voxel_of(p, inverse_voxel_size_));
-    if (it == voxels_.end()) continue;
-    Voxel& voxel = it->second;
-    const auto old_size = voxel.size();
-    voxel.erase(std::remove_if(voxel.begin(), voxel.end(), [&](const Entry& e) { return e.keyframe == keyframe_id; }),
-                voxel.end());
-    point_count_ -= old_size - voxel.size();
-    if (voxel.empty()) voxels_.erase(it);
+    const VoxelKey key = voxel_of(p, inverse_voxel_size_);
+    const std::int32_t index = find_index(key);
+    if (index < 0) continue;
+    Voxel& voxel = voxels_[static_cast<std::size_t>(index)];
+    std::uint32_t kept = 0;
+    for (std::uint32_t i = 0; i < voxel.count; ++i) {
+      if (voxel.keyframes[i] == tag) continue;
+      voxel.points[kept] = voxel.points[i];
+      voxel.keyframes[kept] = voxel.keyframes[i];
+      ++kept;
+    }
+    point_count_ -= voxel.count - kept;
+    voxel.count = kept;
+    if (kept == 0) erase(key);
   }
 }
 
 int LocalMap::nearest(const Eigen::Vector3d& query, int k, double max_distance,
                       std::array<Eigen::Vector3d, kMaxNeighbours>& out) const {
   k = std::min(k, kMaxNeighbours);
-  std::array<double, kMaxNeighbours> best_d2;
+  std::array<float, kMaxNeighbours> best_d2;
+  std::array<Eigen::Vector3f, kMaxNeighbours> best;
   int found = 0;
-  double worst = max_distance * max_distance;
+  float worst = static_cast<float>(max_distance * max_distance);
+  const Eigen::Vector3f q = query.cast<float>();
   const VoxelKey centre = voxel_of(query, inverse_voxel_size_);
-  // One ring of voxels is exact for max_distance <= voxel size (the configuration enforces it):
-  // 27 hash look-ups, where a wider gate would cost 125.
-  constexpr int reach = 1;
-  for (int dx = -reach; dx <= reach; ++dx) {
-    for (int dy = -reach; dy <= reach; ++dy) {
-      for (int dz = -reach; dz <= reach; ++dz) {
-        const auto it = voxels_.find({centre.x + dx, centre.y + dy, centre.z + dz});
-        if (it == voxels_.end()) continue;
-        for (const Entry& e : it->second) {
-          const double d2 = (e.point - query).squaredNorm();
+  // One ring of voxels is exact for max_distance <= voxel size (the configuration enforces it).
+  for (int dx = -1; dx <= 1; ++dx) {
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dz = -1; dz <= 1; ++dz) {
+        const Voxel* voxel = find({centre.x + dx, centre.y + dy, centre.z + dz});
+        if (voxel == nullptr) continue;
+        for (std::uint32_t j = 0; j < voxel->count; ++j) {
+          const float d2 = (voxel->points[j] - q).squaredNorm();
           if (d2 >= worst) continue;
-          // Insertion into the sorted best list.
           int pos = found < k ? found : k - 1;
-          while (pos > 0 && best_d2[pos - 1] > d2) {
-            best_d2[pos] = best_d2[pos - 1];
-            out[pos] = out[pos - 1];
+          while (pos > 0 && best_d2[static_cast<std::size_t>(pos - 1)] > d2) {
+            best_d2[static_cast<std::size_t>(pos)] = best_d2[static_cast<std::size_t>(pos - 1)];
+            best[static_cast<std::size_t>(pos)] = best[static_cast<std::size_t>(pos - 1)];
             --pos;
           }
-          best_d2[pos] = d2;
-          out[pos] = e.point;
+          best_d2[static_cast<std::size_t>(pos)] = d2;
+          best[static_cast<std::size_t>(pos)] = voxel->points[j];
           if (found < k) ++found;
-          if (found == k) worst = best_d2[k - 1];
+          if (found == k) worst = best_d2[static_cast<std::size_t>(k - 1)];
         }
       }
     }
   }
+  for (int i = 0; i < found; ++i) out[static_cast<std::size_t>(i)] = best[static_cast<std::size_t>(i)].cast<double>();
   return found;
 }
 
 std::vector<Eigen::Vector3d> LocalMap::points() const {
   std::vector<Eigen::Vector3d> all;
   all.reserve(point_count_);
-  for (const auto& [key, voxel] : voxels_) {
-    for (const Entry& e : voxel) all.push_back(e.point);
+  for (const std::int32_t v : slots_) {
+    if (v < 0) continue;
+    const Voxel& voxel = voxels_[static_cast<std::size_t>(v)];
+    for (std::uint32_t i = 0; i < voxel.count; ++i) all.push_back(voxel.points[i].cast<double>());
   }
   return all;
 }

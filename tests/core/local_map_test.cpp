@@ -16,7 +16,7 @@ std::vector<Eigen::Vector3d> random_cloud(std::size_t n, unsigned seed, double e
 }
 
 TEST(LocalMap, NearestNeighboursMatchBruteForce) {
-  liod::LocalMap map(1.0, 1000, 0.0);
+  liod::LocalMap map(1.0, liod::LocalMap::kMaxPointsPerVoxel, 0.0);
   const auto cloud = random_cloud(5000, 1, 10.0);
   map.add(cloud, 0);
   ASSERT_EQ(map.size(), cloud.size());
@@ -29,7 +29,7 @@ TEST(LocalMap, NearestNeighboursMatchBruteForce) {
     }
     std::sort(d.begin(), d.end());
     ASSERT_EQ(found, static_cast<int>(std::min<std::size_t>(5, d.size())));
-    for (int i = 0; i < found; ++i) EXPECT_NEAR((nn[static_cast<std::size_t>(i)] - q).norm(), d[static_cast<std::size_t>(i)], 1e-12);
+    for (int i = 0; i < found; ++i) EXPECT_NEAR((nn[static_cast<std::size_t>(i)] - q).norm(), d[static_cast<std::size_t>(i)], 1e-5);  // stored as float
   }
 }
 
@@ -40,7 +40,7 @@ TEST(LocalMap, SpacingAndCapacityLimitDensity) {
 }
 
 TEST(LocalMap, RemovingAKeyframeRemovesOnlyItsPoints) {
-  liod::LocalMap map(1.0, 100, 0.0);
+  liod::LocalMap map(1.0, liod::LocalMap::kMaxPointsPerVoxel, 0.0);
   const auto a = random_cloud(300, 3, 5.0);
   const auto b = random_cloud(300, 4, 5.0);
   map.add(a, 1);
@@ -51,8 +51,34 @@ TEST(LocalMap, RemovingAKeyframeRemovesOnlyItsPoints) {
   std::array<Eigen::Vector3d, liod::LocalMap::kMaxNeighbours> nn;
   for (const auto& p : b) {
     ASSERT_EQ(map.nearest(p, 1, 0.5, nn), 1);
-    EXPECT_LT((nn[0] - p).norm(), 1e-12);
+    EXPECT_LT((nn[0] - p).norm(), 1e-5);
   }
 }
 
 }  // namespace
+
+TEST(LocalMap, SurvivesManyInsertionsAndRemovalsOfKeyframes) {
+  // A long drive: keyframes enter and leave; the hash must keep finding what is left.
+  liod::LocalMap map(1.0, 20, 0.1);
+  std::vector<std::vector<Eigen::Vector3d>> window;
+  for (unsigned kf = 0; kf < 200; ++kf) {
+    auto cloud = random_cloud(400, 100 + kf, 6.0);
+    for (auto& p : cloud) p.x() += kf * 2.0;  // the vehicle moves on
+    map.add(cloud, kf);
+    window.push_back(cloud);
+    if (window.size() > 25) {
+      map.remove_keyframe(window.front(), kf - 25);
+      window.erase(window.begin());
+    }
+  }
+  std::size_t expected = 0;
+  for (const auto& cloud : window) expected += cloud.size();
+  EXPECT_LE(map.size(), expected);
+  EXPECT_GT(map.size(), expected / 2);
+  EXPECT_EQ(map.points().size(), map.size());
+  std::array<Eigen::Vector3d, liod::LocalMap::kMaxNeighbours> nn;
+  EXPECT_EQ(map.nearest({2.0, 0.0, 0.0}, 1, 1.0, nn), 0);  // the first keyframes are gone
+  int hits = 0;
+  for (const auto& p : window.back()) hits += map.nearest(p, 1, 0.11, nn);
+  EXPECT_EQ(hits, static_cast<int>(window.back().size()));
+}

@@ -76,7 +76,7 @@ struct OdometryConfig {
   double hausdorff_threshold_m = 0.6; // h1
   double hausdorff_voxel_m = 1.0;     // clouds are downsampled to this before the Hausdorff test
   int window_keyframes = 25;
-  double degeneracy_eigenvalue = 200.0;  // smallest Hessian eigenvalue (1/m^2 units) considered well constrained
+  double degeneracy_eigenvalue = 30.0;  // LiDAR information (weighted residual count) below which a direction is degenerate
   double init_gyro_bias_std = 0.01;      // rad/s
   double init_accel_bias_std = 0.2;      // m/s^2
   double init_velocity_std = 20.0;       // m/s: unknown speed at a rolling start

@@ -19,6 +19,12 @@ struct UpdateParams {
   int max_iterations = 5;
   double lidar_noise_m = 0.03;
   CorrespondenceParams correspondence;
+  // After two searches, neighbours are searched again only if the pose moved more than this.
+  double research_translation_m = 0.02;
+  double research_rotation_rad = 0.002;
+  /// Directions of the LiDAR information (eigenvalues of sum w h^T h, i.e. a weighted count of
+  /// residuals) below this carry no LiDAR update: the prior holds them.
+  double degeneracy_eigenvalue = 30.0;
 };
 
 struct UpdateResult {
@@ -31,6 +37,8 @@ struct UpdateResult {
   /// constraints along the worst direction): low means the scene constrains the pose poorly.
   double min_translation_eigenvalue = 0.0;
   double min_rotation_eigenvalue = 0.0;
+  /// How many of the 6 pose directions fell below UpdateParams::degeneracy_eigenvalue.
+  int degenerate_directions = 0;
 };
 
 /// x (+) delta, with the rotation perturbed on the right.

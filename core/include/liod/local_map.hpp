@@ -2,11 +2,12 @@
 // The local map: points of the keyframes in the sliding window, in a voxel hash that answers
 // k-nearest-neighbour queries without rebuilding a tree per scan. Each point remembers its
 // keyframe so that the oldest keyframe's points leave the map when it leaves the window.
+// The hash is open-addressed (linear probing) over a pool of fixed-capacity voxels: a query's
+// 27 look-ups touch a few cache lines instead of chasing a node-based map's pointers.
 
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
-#include <unordered_map>
 #include <vector>
 
 #include "liod/voxel_grid.hpp"
@@ -16,13 +17,15 @@ namespace liod {
 class LocalMap {
  public:
   static constexpr int kMaxNeighbours = 8;
+  static constexpr int kMaxPointsPerVoxel = 32;
 
+  /// max_points_per_voxel is capped at kMaxPointsPerVoxel.
   LocalMap(double voxel_size, int max_points_per_voxel, double min_point_spacing);
 
   /// Adds world-frame points of one keyframe, keeping at most max_points_per_voxel per voxel and
   /// no two points closer than min_point_spacing.
   void add(const std::vector<Eigen::Vector3d>& points, std::uint64_t keyframe_id);
-  /// Removes every point that came from this keyframe.
+  /// Removes every point that came from this keyframe (`points` are the ones it added).
   void remove_keyframe(const std::vector<Eigen::Vector3d>& points, std::uint64_t keyframe_id);
 
   /// The k nearest map points within max_distance (<= the voxel size) of the query, nearest
@@ -36,18 +39,30 @@ class LocalMap {
   std::vector<Eigen::Vector3d> points() const;
 
  private:
-  struct Entry {
-    Eigen::Vector3d point;
-    std::uint64_t keyframe;
+  struct Voxel {
+    VoxelKey key;
+    std::uint32_t count = 0;
+    std::array<Eigen::Vector3f, kMaxPointsPerVoxel> points;
+    std::array<std::uint32_t, kMaxPointsPerVoxel> keyframes;
   };
-  using Voxel = std::vector<Entry>;
+  static constexpr std::int32_t kEmpty = -1;
+  static constexpr std::int32_t kDeleted = -2;
 
-  double voxel_size_;
+  std::size_t slot_of(const VoxelKey& key) const { return VoxelKeyHash{}(key) & (slots_.size() - 1); }
+  std::int32_t find_index(const VoxelKey& key) const;
+  const Voxel* find(const VoxelKey& key) const;
+  Voxel& find_or_insert(const VoxelKey& key);
+  void erase(const VoxelKey& key);
+  void rehash(std::size_t capacity);
+
   double inverse_voxel_size_;
-  std::size_t max_points_per_voxel_;
-  double min_spacing_squared_;
+  std::uint32_t max_points_per_voxel_;
+  float min_spacing_squared_;
   std::size_t point_count_ = 0;
-  std::unordered_map<VoxelKey, Voxel, VoxelKeyHash> voxels_;
+  std::vector<std::int32_t> slots_;  // index into voxels_, or kEmpty / kDeleted
+  std::vector<Voxel> voxels_;
+  std::vector<std::int32_t> free_voxels_;
+  std::size_t used_slots_ = 0;  // live + deleted, for the load factor
 };
 
 }  // namespace liod
