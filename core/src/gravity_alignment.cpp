@@ -38,9 +38,10 @@ std::optional<GravityAlignment> align_gravity(const std::deque<ImuSample>& sampl
   accel_var /= static_cast<double>(n);
   GravityAlignment out;
   out.rotation = rotation_from_up(accel_mean);
-  // Standing still: little vibration and no turning; the mean rate is then the gyro bias.
-  out.stationary = accel_var < 0.05 && gyro_max < 0.05;
-  out.gyro_bias = out.stationary ? gyro_mean : Eigen::Vector3d::Zero();
+  // Little vibration and no turning: standing still, or cruising straight (the IMU cannot tell
+  // the two apart). Either way the mean rate is the gyro bias.
+  out.steady = accel_var < 0.05 && gyro_max < 0.05;
+  out.gyro_bias = out.steady ? gyro_mean : Eigen::Vector3d::Zero();
   return out;
 }
 

@@ -189,9 +189,8 @@ void LidarInertialOdometry::initialize(const Scan& scan, OdometryResult& result)
   const double tilt = o.init_tilt_std_deg * kDegToRad;
   covariance_.diagonal().segment<3>(0) << tilt * tilt, tilt * tilt, 1e-6;  // yaw defines the world frame
   covariance_.diagonal().segment<3>(3).setConstant(1e-6);                    // so does the origin
-  const double v_std = alignment->stationary ? 0.05 : o.init_velocity_std;
-  covariance_.diagonal().segment<3>(6).setConstant(v_std * v_std);
-  if (!alignment->stationary) first_scan_ = scan;  // its speed is found with the next scan
+  covariance_.diagonal().segment<3>(6).setConstant(o.init_velocity_std * o.init_velocity_std);
+  first_scan_ = scan;  // the speed, unknown even at rest, is found with the next scan
   covariance_.diagonal().segment<3>(9).setConstant(o.init_gyro_bias_std * o.init_gyro_bias_std);
   covariance_.diagonal().segment<3>(12).setConstant(o.init_accel_bias_std * o.init_accel_bias_std);
   initialized_ = true;
@@ -206,7 +205,7 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
     initialize(scan, result);
     if (!initialized_) return std::nullopt;
     if (first_scan_) {
-      // Rolling start: report the attitude only; the pose follows once the speed is known.
+      // Report the attitude only; the pose follows once the speed is known.
       result.state = state_;
       result.covariance = covariance_;
       return result;
@@ -228,72 +227,66 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
 }
 
 bool LidarInertialOdometry::initialize_velocity(const Scan& first, const Scan& second) {
-  // A vehicle that is already moving: try horizontal velocities, deskew both scans with each and
-  // keep the one under which the second scan lies best on the first (most point-to-plane
-  // inliers). Both scans are deskewed consistently, so the winner is the true speed, not merely
-  // the one that smears the second scan like the first.
+  // A vehicle that is already moving: the speed is what makes the second scan land on the first.
+  // Register the second scan on the first (both deskewed with the current speed guess, coarse
+  // to fine so that a 1.5 m jump at 15 m/s is within reach), turn the displacement into a speed
+  // through the IMU's own motion over the interval, and repeat: the deskew depends on the speed
+  // only weakly, so a few rounds converge.
   ScanFeatures first_features;
   ScanFeatures second_features;
   extractor_.extract(first, first_features);
   extractor_.extract(second, second_features);
   const NavState base = state_;
-  const auto intervals = imu_intervals(imu_, base.time, scan_end_time(second));
-  CorrespondenceParams gate = update_params_.correspondence;
-  auto score = [&](const Eigen::Vector3d& velocity) {
+  const double t_end = scan_end_time(second);
+  const auto intervals = imu_intervals(imu_, base.time, t_end);
+  ImuPreintegration preintegration(base.gyro_bias, base.accel_bias, noise_);
+  for (const auto& iv : intervals) preintegration.integrate(iv.gyro, iv.accel, iv.dt);
+  const double span = preintegration.duration();
+  if (span <= 0.0) return false;
+
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
+  UpdateResult last;
+  constexpr int kRounds = 4;
+  for (int round = 0; round < kRounds; ++round) {
     NavState start = base;
     start.velocity = velocity;
     const PoseTable world = integrate_imu_poses(start, intervals, gravity_);
-    Features a;
-    Features b;
-    deskew_features(first, first_features, world, a);
-    deskew_features(second, second_features, world, b);
-    LocalMap map(config_.odometry.map_voxel_m, config_.odometry.map_points_per_voxel,
-                 config_.odometry.map_min_point_spacing_m);
-    map.add(a.map_planes, 0);
-    const std::size_t stride = std::max<std::size_t>(1, b.planes.size() / 600);
-    int inliers = 0;
-    for (std::size_t i = 0; i < b.planes.size(); i += stride) {
-      const auto plane = plane_correspondence(map, b.planes[i], gate);
-      if (plane && std::abs(plane->evaluate(b.planes[i])) < 0.1) ++inliers;
+    Features reference;
+    deskew_features(first, first_features, world, reference);
+    NavState predicted = preintegration.predict(start, gravity_);
+    PoseTable relative = world;
+    relative.make_relative_to({Eigen::Quaterniond(predicted.rotation), predicted.position});
+    Features current;
+    deskew_features(second, second_features, relative, current);
+
+    // Position free (the speed is unknown), attitude change from the gyro trusted to ~1 deg.
+    StateCovariance prior = StateCovariance::Identity() * 1e-8;
+    prior.block<3, 3>(0, 0) = Eigen::Matrix3d::Identity() * std::pow(1.0 * kDegToRad, 2);
+    prior.block<3, 3>(3, 3) = Eigen::Matrix3d::Identity() * 100.0;
+    NavState estimate = predicted;
+    for (const double voxel : {3.0, 1.0}) {
+      LocalMap map(voxel, LocalMap::kMaxPointsPerVoxel, voxel / 6.0);
+      map.add(reference.map_planes, 0);
+      LocalMap edges(voxel, LocalMap::kMaxPointsPerVoxel, voxel / 6.0);
+      edges.add(reference.edges, 0);
+      UpdateParams params = update_params_;
+      params.correspondence.max_distance_m = voxel;
+      params.correspondence.max_plane_thickness_m = std::max(0.1, voxel / 10.0);
+      params.max_iterations = 10;
+      params.degeneracy_eigenvalue = 0.0;
+      last = iterated_update(estimate, prior, current.planes, map, current.edges, edges, params);
+      estimate = last.state;
     }
-    return inliers;
-  };
-  auto horizontal = [](double speed, double heading) {
-    return Eigen::Vector3d(speed * std::cos(heading), speed * std::sin(heading), 0.0);
-  };
-  double best_speed = 0.0;
-  double best_heading = 0.0;
-  int best = score(Eigen::Vector3d::Zero());
-  constexpr int kHeadings = 12;
-  for (int h = 0; h < kHeadings; ++h) {
-    for (double speed = 2.0; speed <= 30.0; speed += 2.0) {
-      const double heading = 2.0 * M_PI * h / kHeadings;
-      const int inliers = score(horizontal(speed, heading));
-      if (inliers > best) {
-        best = inliers;
-        best_speed = speed;
-        best_heading = heading;
-      }
-    }
+    // p_end = p0 + v T + g T^2 / 2 + R0 dp(T)  =>  v.
+    velocity = (estimate.position - base.position - 0.5 * gravity_ * span * span -
+                base.rotation * preintegration.delta_position(base.gyro_bias, base.accel_bias)) /
+               span;
   }
-  const double coarse_speed = best_speed;
-  const double coarse_heading = best_heading;
-  for (double dh : {-10.0, -5.0, 0.0, 5.0, 10.0}) {
-    for (double ds : {-1.0, -0.5, 0.0, 0.5, 1.0}) {
-      if (coarse_speed + ds < 0.0 || (dh == 0.0 && ds == 0.0)) continue;
-      const int inliers = score(horizontal(coarse_speed + ds, coarse_heading + dh * kDegToRad));
-      if (inliers > best) {
-        best = inliers;
-        best_speed = coarse_speed + ds;
-        best_heading = coarse_heading + dh * kDegToRad;
-      }
-    }
-  }
-  constexpr int kMinInliers = 50;
-  if (best < kMinInliers) return false;  // no structure to tell: stay with the wide prior
-  state_.velocity = horizontal(best_speed, best_heading);
-  // Within the search grid's resolution; the filter refines it from here.
-  covariance_.block<3, 3>(6, 6) = Eigen::Matrix3d::Identity();
+  constexpr int kMinResiduals = 100;
+  if (last.residuals < kMinResiduals) return false;  // no structure to tell: stay with the wide prior
+  state_.velocity = velocity;
+  // Good to a fraction of a metre per second; the filter refines it from here.
+  covariance_.block<3, 3>(6, 6) = Eigen::Matrix3d::Identity() * 0.25;
   covariance_.block<3, 3>(6, 0).setZero();
   covariance_.block<3, 3>(0, 6).setZero();
   return true;

@@ -1,7 +1,8 @@
 #pragma once
 // Initial attitude from the accelerometer: the mean specific force points opposite to gravity.
 // At a rolling start the vehicle's own acceleration tilts this estimate, so the filter starts
-// with a roll/pitch uncertainty and the LiDAR corrects it.
+// with a roll/pitch uncertainty and the LiDAR corrects it. The speed is not observable here at
+// all (rest and steady cruising read the same): the odometry finds it from the first two scans.
 
 #include <Eigen/Core>
 #include <deque>
@@ -13,8 +14,8 @@ namespace liod {
 
 struct GravityAlignment {
   Eigen::Matrix3d rotation;          // R_world_body with zero yaw
-  Eigen::Vector3d gyro_bias;         // mean angular rate if the vehicle stood still, else zero
-  bool stationary = false;
+  Eigen::Vector3d gyro_bias;         // mean angular rate if the motion was steady, else zero
+  bool steady = false;               // no vibration or turning: at rest or cruising straight
 };
 
 /// Uses the samples in [from, to]; nullopt with fewer than min_samples.

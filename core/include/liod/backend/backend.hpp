@@ -1,0 +1,72 @@
+#pragma once
+// liod's backend (DESIGN.md module 3, issue 5): keyframes from the front end go into a pose
+// graph; each new keyframe is checked for a loop against older ones (loop_closure.hpp) and a
+// verified loop triggers a full pose-graph solve. Between loops the graph only chains the
+// odometry (no solve), so a long drive stays cheap. The result is a correction T_world_odom
+// that the pose output applies to the odometry's poses; the odometry itself keeps its own frame.
+// Pure: no threads, no I/O (persistence is map_store.hpp); the daemon runs it on its own
+// low-priority thread.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "liod/backend/loop_closure.hpp"
+#include "liod/backend/pose_graph.hpp"
+#include "liod/config.hpp"
+#include "liod/imu_preintegration.hpp"
+#include "liod/lidar_inertial_odometry.hpp"
+
+namespace liod {
+
+struct BackendStats {
+  std::size_t keyframes = 0;
+  std::size_t loops_accepted = 0;
+  std::size_t loops_rejected = 0;  // candidates verified and rejected, any reason
+  std::array<std::size_t, 6> outcomes{};  // per LoopOutcome
+  std::vector<double> solve_ms;    // one per full solve
+  std::vector<double> check_ms;    // one per candidate verified
+};
+
+class Backend {
+ public:
+  explicit Backend(const Config& config);
+
+  /// Adds a keyframe (its points are in the odometry's world frame, as the front end keeps
+  /// them); returns true when it closed a loop (and the graph was re-optimised).
+  bool add_keyframe(const Keyframe& keyframe);
+
+  /// T_world_odom: maps the odometry's poses into the optimised world frame, from the newest
+  /// keyframe (optimised pose * odometry pose^-1). Identity before the first loop.
+  Eigen::Isometry3d correction() const;
+  /// Optimised T_world_body of every keyframe, in the order added.
+  std::vector<Eigen::Isometry3d> optimized_keyframe_poses() const { return graph_.poses(); }
+  /// The odometry's poses corrected: the keyframe corrections interpolated in time (slerp /
+  /// lerp) between the keyframes around each pose, held constant outside them.
+  std::vector<NavState> corrected_trajectory(const std::vector<NavState>& odometry_poses) const;
+
+  /// Every keyframe's points (planes and edges) at the optimised poses, voxel-downsampled.
+  std::vector<Eigen::Vector3d> global_map(double voxel_m) const;
+
+  const BackendStats& stats() const { return stats_; }
+  /// Every verified candidate, in order (for logs and tests).
+  const std::vector<LoopCheck>& loop_checks() const { return checks_; }
+  const std::vector<BackendKeyframe>& keyframes() const { return keyframes_; }
+  const PoseGraph& graph() const { return graph_; }
+
+ private:
+  bool search_loop(std::size_t current);
+  bool close_loop(const LoopCheck& check);
+
+  Config config_;
+  PoseGraph graph_;
+  std::vector<BackendKeyframe> keyframes_;
+  std::vector<double> times_;
+  std::vector<LoopCheck> checks_;
+  BackendStats stats_;
+  int cooldown_ = 0;
+};
+
+}  // namespace liod

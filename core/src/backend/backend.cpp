@@ -1,0 +1,197 @@
+#include "liod/backend/backend.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "liod/voxel_grid.hpp"
+
+namespace liod {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+Eigen::Isometry3d isometry(const NavState& s) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = s.rotation;
+  t.translation() = s.position;
+  return t;
+}
+
+std::vector<Eigen::Vector3f> to_body(const std::vector<Eigen::Vector3d>& world, const Eigen::Isometry3d& world_from_body,
+                                     double voxel_m) {
+  const Eigen::Isometry3d body_from_world = world_from_body.inverse();
+  std::vector<Eigen::Vector3d> body;
+  body.reserve(world.size());
+  for (const auto& p : world) body.push_back(body_from_world * p);
+  if (voxel_m > 0.0) body = voxel_downsample(body, voxel_m);
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(body.size());
+  for (const auto& p : body) out.push_back(p.cast<float>());
+  return out;
+}
+
+// a * (1 - s) + b * s on SE(3) as slerp / lerp: enough for corrections that differ little
+// between neighbouring keyframes.
+Eigen::Isometry3d interpolate(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double s) {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  const Eigen::Quaterniond qa(a.linear());
+  const Eigen::Quaterniond qb(b.linear());
+  out.linear() = qa.slerp(s, qb).normalized().toRotationMatrix();
+  out.translation() = (1.0 - s) * a.translation() + s * b.translation();
+  return out;
+}
+
+}  // namespace
+
+Backend::Backend(const Config& config) : config_(config) {}
+
+bool Backend::add_keyframe(const Keyframe& keyframe) {
+  const BackendConfig& b = config_.backend;
+  BackendKeyframe k;
+  k.id = keyframe.id;
+  k.time = keyframe.state.time;
+  k.odometry_pose = isometry(keyframe.state);
+  k.planes = to_body(keyframe.planes_world, k.odometry_pose, b.keyframe_voxel_m);
+  k.edges = to_body(keyframe.edges_world, k.odometry_pose, b.keyframe_voxel_m);
+  k.similarity = to_body(keyframe.similarity_cloud_world, k.odometry_pose, 0.0);
+
+  std::size_t node = 0;
+  if (keyframes_.empty()) {
+    node = graph_.add_node(k.odometry_pose);  // held fixed: the world frame is the odometry's
+  } else {
+    // Between loops the graph only chains the odometry: the new node continues from its
+    // predecessor's optimised pose by the odometry increment (no solve).
+    const std::size_t previous = keyframes_.size() - 1;
+    const Eigen::Isometry3d increment = keyframes_.back().odometry_pose.inverse() * k.odometry_pose;
+    node = graph_.add_node(graph_.pose(previous) * increment);
+    PoseGraphFactor f;
+    f.from = previous;
+    f.to = node;
+    f.measured = increment;
+    f.information = relative_pose_information(b.odometry_translation_sigma_m, b.odometry_rotation_sigma_deg * kDegToRad);
+    graph_.add_factor(f);
+  }
+  if (b.tilt_sigma_deg > 0.0) {
+    graph_.set_tilt(node, k.odometry_pose.linear().transpose() * Eigen::Vector3d::UnitZ(), b.tilt_sigma_deg * kDegToRad);
+  }
+  keyframes_.push_back(std::move(k));
+  times_.push_back(keyframes_.back().time);
+  ++stats_.keyframes;
+
+  if (cooldown_ > 0) {
+    --cooldown_;
+    return false;
+  }
+  return search_loop(node);
+}
+
+bool Backend::search_loop(std::size_t current) {
+  const BackendConfig& b = config_.backend;
+  const auto candidates =
+      loop_candidates(graph_.poses(), times_, current, b, static_cast<std::size_t>(b.loop_candidates));
+  for (const std::size_t candidate : candidates) {
+    LoopCheck check = check_loop(keyframes_, graph_.poses(), current, candidate, config_);
+    stats_.check_ms.push_back(check.check_ms);
+    bool closed = false;
+    if (check.outcome == LoopOutcome::kAccepted) {
+      closed = close_loop(check);
+      if (!closed) check.outcome = LoopOutcome::kInconsistent;
+    }
+    ++stats_.outcomes[static_cast<std::size_t>(check.outcome)];
+    checks_.push_back(check);
+    if (closed) {
+      ++stats_.loops_accepted;
+      cooldown_ = b.loop_cooldown_keyframes;
+      return true;
+    }
+    ++stats_.loops_rejected;
+  }
+  return false;
+}
+
+bool Backend::close_loop(const LoopCheck& check) {
+  const BackendConfig& b = config_.backend;
+  const std::vector<Eigen::Isometry3d> before = graph_.poses();
+  const double scale = b.robust_loss_scale;
+  auto outliers = [&]() {
+    std::size_t n = 0;
+    for (const auto& f : graph_.factors()) n += f.loop && graph_.whitened_error(f) > scale ? 1 : 0;
+    return n;
+  };
+  const std::size_t outliers_before = scale > 0.0 ? outliers() : 0;
+
+  // Initial guess with the new loop closed: its error (registered vs graph pose of the current
+  // keyframe) spread along the keyframes since the candidate. Starting the solve from there
+  // keeps a redescending (Cauchy) kernel from treating a large but true drift as an outlier.
+  const std::size_t j = check.candidate;
+  const std::size_t c = check.current;
+  const Eigen::Isometry3d delta = check.registered * graph_.pose(c).inverse();
+  for (std::size_t k = j + 1; k <= c; ++k) {
+    const double s = static_cast<double>(k - j) / static_cast<double>(c - j);
+    graph_.set_pose(k, interpolate(Eigen::Isometry3d::Identity(), delta, s) * graph_.pose(k));
+  }
+  PoseGraphFactor f;
+  f.from = j;
+  f.to = c;
+  f.measured = check.measured;
+  f.information = relative_pose_information(b.loop_translation_sigma_m, b.loop_rotation_sigma_deg * kDegToRad);
+  f.loop = true;
+  graph_.add_factor(f);
+  const SolveReport report =
+      graph_.optimize(scale > 0.0 ? RobustLoss::kCauchy : RobustLoss::kNone, scale, b.max_solver_iterations);
+  stats_.solve_ms.push_back(report.solve_ms);
+
+  // Consistency: a loop the solution leaves beyond the kernel scale, or one that turns earlier
+  // loops into outliers, disagrees with the rest of the graph: undo it.
+  if (scale > 0.0 && (graph_.whitened_error(graph_.factors().back()) > scale || outliers() > outliers_before)) {
+    graph_.pop_factor();
+    for (std::size_t k = 0; k < before.size(); ++k) graph_.set_pose(k, before[k]);
+    return false;
+  }
+  return true;
+}
+
+Eigen::Isometry3d Backend::correction() const {
+  if (keyframes_.empty()) return Eigen::Isometry3d::Identity();
+  return graph_.poses().back() * keyframes_.back().odometry_pose.inverse();
+}
+
+std::vector<NavState> Backend::corrected_trajectory(const std::vector<NavState>& odometry_poses) const {
+  std::vector<NavState> out = odometry_poses;
+  if (keyframes_.empty()) return out;
+  std::vector<Eigen::Isometry3d> corrections(keyframes_.size());
+  for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+    corrections[k] = graph_.pose(k) * keyframes_[k].odometry_pose.inverse();
+  }
+  for (auto& s : out) {
+    const auto it = std::upper_bound(times_.begin(), times_.end(), s.time);
+    Eigen::Isometry3d c;
+    if (it == times_.begin()) {
+      c = corrections.front();
+    } else if (it == times_.end()) {
+      c = corrections.back();
+    } else {
+      const auto k1 = static_cast<std::size_t>(it - times_.begin());
+      const std::size_t k0 = k1 - 1;
+      const double span = times_[k1] - times_[k0];
+      const double a = span > 0.0 ? (s.time - times_[k0]) / span : 0.0;
+      c = interpolate(corrections[k0], corrections[k1], a);
+    }
+    s.rotation = c.linear() * s.rotation;
+    s.position = c * s.position;
+    s.velocity = c.linear() * s.velocity;
+  }
+  return out;
+}
+
+std::vector<Eigen::Vector3d> Backend::global_map(double voxel_m) const {
+  std::vector<Eigen::Vector3d> points;
+  for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+    const Eigen::Isometry3d& pose = graph_.pose(k);
+    for (const auto& p : keyframes_[k].planes) points.push_back(pose * p.cast<double>());
+    for (const auto& p : keyframes_[k].edges) points.push_back(pose * p.cast<double>());
+  }
+  return voxel_downsample(points, voxel_m);
+}
+
+}  // namespace liod

@@ -1,0 +1,301 @@
+#include "liod/backend/loop_closure.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+
+#include "liod/iterated_update.hpp"
+#include "liod/local_map.hpp"
+#include "liod/map_correspondence.hpp"
+#include "liod/so3.hpp"
+#include "liod/voxel_grid.hpp"
+
+namespace liod {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+// Nearest-neighbour distances below `cap` for many queries against one cloud: cells of size
+// cap, so every neighbour closer than cap lies in the 27 cells around the query.
+class NearestGrid {
+ public:
+  NearestGrid(const std::vector<Eigen::Vector3d>& points, double cap) : inverse_(1.0 / cap), cap_(cap) {
+    grid_.reserve(points.size());
+    for (const auto& p : points) grid_[voxel_of(p, inverse_)].push_back(p);
+  }
+  double distance(const Eigen::Vector3d& q) const {
+    const VoxelKey c = voxel_of(q, inverse_);
+    double best = cap_ * cap_;
+    for (int dx = -1; dx <= 1; ++dx) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = grid_.find({c.x + dx, c.y + dy, c.z + dz});
+          if (it == grid_.end()) continue;
+          for (const auto& p : it->second) best = std::min(best, (p - q).squaredNorm());
+        }
+      }
+    }
+    return std::sqrt(best);
+  }
+  bool empty() const { return grid_.empty(); }
+
+ private:
+  double inverse_;
+  double cap_;
+  std::unordered_map<VoxelKey, std::vector<Eigen::Vector3d>, VoxelKeyHash> grid_;
+};
+
+double quantile_of(std::vector<double>& values, double q) {
+  if (values.empty()) return 0.0;
+  const auto k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(values.size()))) - (q > 0.0 ? 1 : 0);
+  const auto index = std::min(values.size() - 1, k);
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(index), values.end());
+  return values[index];
+}
+
+double partial_directed(const std::vector<Eigen::Vector3d>& a, const NearestGrid& b, double q, double cap,
+                        std::vector<double>& scratch) {
+  if (a.empty() || b.empty()) return cap;
+  scratch.clear();
+  for (const auto& p : a) scratch.push_back(b.distance(p));
+  return quantile_of(scratch, q);
+}
+
+std::vector<Eigen::Vector3d> to_world(const std::vector<Eigen::Vector3f>& body, const Eigen::Isometry3d& pose) {
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(body.size());
+  for (const auto& p : body) out.push_back(pose * p.cast<double>());
+  return out;
+}
+
+std::vector<Eigen::Vector3d> to_double(const std::vector<Eigen::Vector3f>& in) {
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(in.size());
+  for (const auto& p : in) out.push_back(p.cast<double>());
+  return out;
+}
+
+Eigen::Vector3d up_in_body(const Eigen::Isometry3d& pose) { return pose.linear().transpose() * Eigen::Vector3d::UnitZ(); }
+
+}  // namespace
+
+const char* to_string(LoopOutcome outcome) {
+  switch (outcome) {
+    case LoopOutcome::kAccepted: return "accepted";
+    case LoopOutcome::kNoCandidate: return "no candidate";
+    case LoopOutcome::kDissimilar: return "dissimilar";
+    case LoopOutcome::kRegistrationFailed: return "registration failed";
+    case LoopOutcome::kVerticalDisagreement: return "vertical disagreement";
+    case LoopOutcome::kInconsistent: return "inconsistent with the graph";
+  }
+  return "?";
+}
+
+std::vector<std::size_t> loop_candidates(const std::vector<Eigen::Isometry3d>& poses, const std::vector<double>& times,
+                                         std::size_t current, const BackendConfig& config, std::size_t limit) {
+  std::vector<std::pair<double, std::size_t>> found;
+  const Eigen::Vector3d c = poses[current].translation();
+  for (std::size_t i = 0; i < current; ++i) {
+    if (times[current] - times[i] < config.loop_time_gap_s) continue;
+    Eigen::Vector3d d = poses[i].translation() - c;
+    // The paper's 2D test ignores z, where odometry drifts most; 3D is the ablation.
+    if (config.loop_distance == LoopDistance::k2D) d.z() = 0.0;
+    const double distance = d.norm();
+    if (distance <= config.loop_radius_m) found.emplace_back(distance, i);
+  }
+  std::sort(found.begin(), found.end());
+  // Keep candidates from distinct passes: neighbours of an already kept candidate (within the
+  // sub-map span) would only repeat the same test.
+  std::vector<std::size_t> out;
+  for (const auto& [distance, index] : found) {
+    bool near_kept = false;
+    for (auto k : out) {
+      near_kept = near_kept || (index > k ? index - k : k - index) <= static_cast<std::size_t>(config.submap_keyframes);
+    }
+    if (!near_kept) out.push_back(index);
+    if (out.size() >= limit) break;
+  }
+  return out;
+}
+
+double partial_directed_hausdorff(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b,
+                                  double quantile, double cap) {
+  const NearestGrid grid(b, cap);
+  std::vector<double> scratch;
+  return partial_directed(a, grid, quantile, cap, scratch);
+}
+
+double partial_hausdorff(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b, double quantile,
+                         double cap) {
+  return std::max(partial_directed_hausdorff(a, b, quantile, cap), partial_directed_hausdorff(b, a, quantile, cap));
+}
+
+SimilarityResult similarity_search(const std::vector<Eigen::Vector3d>& cloud_body, const Eigen::Isometry3d& guess,
+                                   const std::vector<Eigen::Vector3d>& submap_world, const BackendConfig& config) {
+  const double q = config.similarity_quantile;
+  // Distances beyond twice the threshold only need to be known as "too far".
+  const double cap = std::max(2.0 * config.similarity_threshold_m, 0.5);
+  const NearestGrid grid(submap_world, cap);
+  std::vector<double> scratch;
+  const Eigen::Vector3d centre = guess.translation();
+
+  // Coarse grid: 1 m in x-y (the sub-map's similarity cloud is ~1 m voxels), the yaw limits,
+  // and z in steps of half the vertical limit (a larger z offset is rejected later anyway).
+  const double step = 1.0;
+  const int nxy = static_cast<int>(std::floor(config.similarity_search_m / step));
+  const double yaw_limit = config.similarity_search_yaw_deg * kDegToRad;
+  const int nyaw = yaw_limit > 0.0 ? 2 : 0;
+  const double z_step = 0.5 * config.max_vertical_m;
+  SimilarityResult best;
+  best.distance_m = std::numeric_limits<double>::infinity();
+  best.aligned = guess;
+  std::vector<Eigen::Vector3d> moved(cloud_body.size());
+  std::vector<Eigen::Vector3d> base(cloud_body.size());
+  for (std::size_t i = 0; i < cloud_body.size(); ++i) base[i] = guess * cloud_body[i] - centre;
+  for (int iyaw = -nyaw; iyaw <= nyaw; ++iyaw) {
+    const double yaw = nyaw > 0 ? yaw_limit * iyaw / nyaw : 0.0;
+    const Eigen::Matrix3d r = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    for (int iz = -1; iz <= 1; ++iz) {
+      for (int ix = -nxy; ix <= nxy; ++ix) {
+        for (int iy = -nxy; iy <= nxy; ++iy) {
+          const Eigen::Vector3d offset(ix * step, iy * step, iz * z_step);
+          for (std::size_t i = 0; i < base.size(); ++i) moved[i] = r * base[i] + centre + offset;
+          const double d = partial_directed(moved, grid, q, cap, scratch);
+          // Ties go to the smaller offset (the odometry's guess is the prior).
+          const double tie = 1e-6 * offset.norm();
+          if (d + tie < best.distance_m) {
+            best.distance_m = d + tie;
+            Eigen::Isometry3d delta = Eigen::Isometry3d::Identity();
+            delta.linear() = r;
+            delta.translation() = centre + offset - r * centre;  // rotate about the keyframe's position
+            best.aligned = delta * guess;
+          }
+        }
+      }
+    }
+  }
+  // The reverse direction at the best alignment: the sub-map's points within the scan's
+  // horizontal reach must be explained by the scan too (a different place rarely is).
+  std::vector<Eigen::Vector3d> aligned(cloud_body.size());
+  double reach = 0.0;
+  for (std::size_t i = 0; i < cloud_body.size(); ++i) {
+    aligned[i] = best.aligned * cloud_body[i];
+    reach = std::max(reach, (aligned[i] - best.aligned.translation()).head<2>().norm());
+  }
+  std::vector<Eigen::Vector3d> cropped;
+  for (const auto& p : submap_world) {
+    if ((p - best.aligned.translation()).head<2>().norm() <= reach) cropped.push_back(p);
+  }
+  const double forward = partial_directed(aligned, grid, q, cap, scratch);
+  const double backward = partial_directed(cropped, NearestGrid(aligned, cap), q, cap, scratch);
+  best.distance_m = std::max(forward, backward);
+  return best;
+}
+
+LoopCheck check_loop(const std::vector<BackendKeyframe>& keyframes, const std::vector<Eigen::Isometry3d>& poses,
+                     std::size_t current, std::size_t candidate, const Config& config) {
+  const auto start = std::chrono::steady_clock::now();
+  const BackendConfig& b = config.backend;
+  LoopCheck check;
+  check.current = current;
+  check.candidate = candidate;
+  auto done = [&](LoopOutcome outcome) {
+    check.outcome = outcome;
+    check.check_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return check;
+  };
+
+  // The candidate's sub-map in the graph's world frame.
+  const std::size_t n = static_cast<std::size_t>(b.submap_keyframes);
+  const std::size_t first = candidate > n ? candidate - n : 0;
+  // Neighbours of the candidate only: never the recent keyframes of the current pass.
+  const std::size_t last = std::min({candidate + n, current - 1, keyframes.size() - 1});
+  std::vector<Eigen::Vector3d> submap_similarity;
+  LocalMap plane_map(config.odometry.map_voxel_m, config.odometry.map_points_per_voxel,
+                     config.odometry.map_min_point_spacing_m);
+  LocalMap edge_map = plane_map;
+  for (std::size_t k = first; k <= last; ++k) {
+    if (keyframes[current].time - keyframes[k].time < b.loop_time_gap_s) continue;
+    const auto sim = to_world(keyframes[k].similarity, poses[k]);
+    submap_similarity.insert(submap_similarity.end(), sim.begin(), sim.end());
+    plane_map.add(to_world(keyframes[k].planes, poses[k]), keyframes[k].id);
+    edge_map.add(to_world(keyframes[k].edges, poses[k]), keyframes[k].id);
+  }
+
+  const Eigen::Isometry3d guess = poses[current];
+  Eigen::Isometry3d initial = guess;
+  if (b.similarity_check) {
+    const auto similarity = similarity_search(to_double(keyframes[current].similarity), guess, submap_similarity, b);
+    check.similarity_m = similarity.distance_m;
+    if (similarity.distance_m > b.similarity_threshold_m) return done(LoopOutcome::kDissimilar);
+    initial = similarity.aligned;
+  }
+
+  // Scan-to-map registration: the front end's iterated update with a weak prior (a LiDAR-only
+  // Gauss-Newton); the prior is re-centred on each round's result so that it only regularises.
+  UpdateParams params;
+  params.max_iterations = 10;
+  params.lidar_noise_m = config.odometry.lidar_noise_m;
+  params.correspondence.max_distance_m = config.odometry.max_correspondence_m;
+  params.degeneracy_eigenvalue = config.odometry.degeneracy_eigenvalue;
+  StateCovariance weak = StateCovariance::Identity();
+  weak.diagonal().segment<3>(0).setConstant(std::pow(5.0 * kDegToRad, 2));
+  weak.diagonal().segment<3>(3).setConstant(2.0 * 2.0);
+  std::vector<Eigen::Vector3d> planes = voxel_downsample(to_double(keyframes[current].planes), config.odometry.plane_voxel_m);
+  std::vector<Eigen::Vector3d> edges = voxel_downsample(to_double(keyframes[current].edges), config.odometry.edge_voxel_m);
+  NavState x;
+  x.rotation = initial.linear();
+  x.position = initial.translation();
+  UpdateResult result;
+  constexpr int kRounds = 4;
+  for (int round = 0; round < kRounds; ++round) {
+    result = iterated_update(x, weak, planes, plane_map, edges, edge_map, params);
+    const Eigen::Matrix<double, 15, 1> moved = boxminus(result.state, x);
+    x = result.state;
+    if (moved.segment<3>(0).norm() < 0.05 * kDegToRad && moved.segment<3>(3).norm() < 0.01) {
+      check.converged = true;
+      break;
+    }
+  }
+  Eigen::Isometry3d registered = Eigen::Isometry3d::Identity();
+  registered.linear() = so3::normalize(x.rotation);
+  registered.translation() = x.position;
+  check.registered = registered;
+  check.degenerate_directions = result.degenerate_directions;
+
+  // Fit: rms over the points that found a plane; a point is an inlier when its residual is
+  // within twice the rms limit (the fraction counts every query, matched or not).
+  const double inlier_m = 2.0 * b.loop_max_rms_m;
+  int inliers = 0;
+  double squared = 0.0;
+  int matched = 0;
+  for (const auto& p : planes) {
+    const Eigen::Vector3d q = registered * p;
+    const auto plane = plane_correspondence(plane_map, q, params.correspondence);
+    if (!plane) continue;
+    const double r = plane->evaluate(q);
+    squared += r * r;
+    ++matched;
+    if (std::abs(r) <= inlier_m) ++inliers;
+  }
+  check.inlier_fraction = planes.empty() ? 0.0 : static_cast<double>(inliers) / static_cast<double>(planes.size());
+  check.rms_m = matched > 0 ? std::sqrt(squared / matched) : 0.0;
+  if (!check.converged || check.degenerate_directions > 0 || check.rms_m > b.loop_max_rms_m ||
+      check.inlier_fraction < b.loop_min_inlier_fraction) {
+    return done(LoopOutcome::kRegistrationFailed);
+  }
+
+  // Vertical check against the graph (not the coarse alignment, which searched z).
+  check.dz_m = registered.translation().z() - guess.translation().z();
+  const double c = std::clamp(up_in_body(registered).dot(up_in_body(guess)), -1.0, 1.0);
+  check.tilt_deg = std::acos(c) / kDegToRad;
+  if (std::abs(check.dz_m) > b.max_vertical_m || check.tilt_deg > b.max_tilt_deg) {
+    return done(LoopOutcome::kVerticalDisagreement);
+  }
+  check.measured = poses[candidate].inverse() * registered;
+  return done(LoopOutcome::kAccepted);
+}
+
+}  // namespace liod

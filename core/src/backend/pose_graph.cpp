@@ -1,0 +1,198 @@
+#include "liod/backend/pose_graph.hpp"
+
+#include <ceres/ceres.h>
+#include <ceres/version.h>
+
+#include <Eigen/Cholesky>
+#include <chrono>
+#include <cmath>
+
+namespace liod {
+namespace {
+
+// Ceres 2.1 replaced LocalParameterization with Manifold; Ubuntu 22.04 ships 2.0, 20.04 ships 1.14.
+#if CERES_VERSION_MAJOR > 2 || (CERES_VERSION_MAJOR == 2 && CERES_VERSION_MINOR >= 1)
+#define LIOD_CERES_HAS_MANIFOLD 1
+#else
+#define LIOD_CERES_HAS_MANIFOLD 0
+#endif
+
+// Relative-pose residual (as in Ceres' pose_graph_3d example, Kümmerle et al. g2o's SE(3) edge):
+//   q_ab_est = q_a^-1 q_b,  p_ab_est = q_a^-1 (p_b - p_a),
+//   r = L [p_ab_est - p_ab_meas; 2 vec(q_ab_meas q_ab_est^-1)]   with L^T L = information.
+struct RelativePoseError {
+  RelativePoseError(const Eigen::Isometry3d& measured, const Matrix6d& sqrt_information)
+      : q_ab(Eigen::Quaterniond(measured.linear()).normalized()), p_ab(measured.translation()), sqrt_info(sqrt_information) {}
+
+  template <typename T>
+  bool operator()(const T* qa_ptr, const T* pa_ptr, const T* qb_ptr, const T* pb_ptr, T* residual_ptr) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q_a(qa_ptr);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> p_a(pa_ptr);
+    const Eigen::Map<const Eigen::Quaternion<T>> q_b(qb_ptr);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> p_b(pb_ptr);
+    const Eigen::Quaternion<T> q_a_inverse = q_a.conjugate();
+    const Eigen::Quaternion<T> q_ab_estimated = q_a_inverse * q_b;
+    const Eigen::Matrix<T, 3, 1> p_ab_estimated = q_a_inverse * (p_b - p_a);
+    const Eigen::Quaternion<T> delta = q_ab.template cast<T>() * q_ab_estimated.conjugate();
+    Eigen::Map<Eigen::Matrix<T, 6, 1>> r(residual_ptr);
+    r.template head<3>() = p_ab_estimated - p_ab.template cast<T>();
+    r.template tail<3>() = T(2.0) * delta.vec();
+    r.applyOnTheLeft(sqrt_info.template cast<T>());
+    return true;
+  }
+
+  Eigen::Quaterniond q_ab;
+  Eigen::Vector3d p_ab;
+  Matrix6d sqrt_info;
+};
+
+// Tilt residual: the world's up axis seen from the body, R^T e_z, against the front end's.
+// Yaw does not enter (rotation about e_z leaves R^T e_z unchanged), which is what lets a loop
+// correct heading while gravity keeps roll and pitch.
+struct TiltError {
+  TiltError(const Eigen::Vector3d& up, double sigma) : up_in_body(up), inverse_sigma(1.0 / sigma) {}
+  template <typename T>
+  bool operator()(const T* q_ptr, T* residual_ptr) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q(q_ptr);
+    const Eigen::Matrix<T, 3, 1> up = q.conjugate() * Eigen::Matrix<T, 3, 1>(T(0), T(0), T(1));
+    Eigen::Map<Eigen::Matrix<T, 3, 1>> r(residual_ptr);
+    r = (up - up_in_body.template cast<T>()) * T(inverse_sigma);
+    return true;
+  }
+  Eigen::Vector3d up_in_body;
+  double inverse_sigma;
+};
+
+Matrix6d sqrt_information(const Matrix6d& information) {
+  // L with L^T L = information: the transposed lower Cholesky factor.
+  const Eigen::LLT<Matrix6d> llt(information);
+  return llt.matrixL().transpose();
+}
+
+}  // namespace
+
+Matrix6d relative_pose_information(double translation_sigma_m, double rotation_sigma_rad) {
+  Matrix6d info = Matrix6d::Zero();
+  info.diagonal().head<3>().setConstant(1.0 / (translation_sigma_m * translation_sigma_m));
+  info.diagonal().tail<3>().setConstant(1.0 / (rotation_sigma_rad * rotation_sigma_rad));
+  return info;
+}
+
+std::size_t PoseGraph::add_node(const Eigen::Isometry3d& initial) {
+  poses_.push_back(initial);
+  tilt_up_.emplace_back(Eigen::Vector3d::Zero());
+  tilt_sigma_.push_back(0.0);
+  return poses_.size() - 1;
+}
+
+void PoseGraph::set_tilt(std::size_t node, const Eigen::Vector3d& up_in_body, double sigma_rad) {
+  tilt_up_[node] = up_in_body.normalized();
+  tilt_sigma_[node] = sigma_rad;
+}
+
+void PoseGraph::add_factor(const PoseGraphFactor& factor) { factors_.push_back(factor); }
+
+double PoseGraph::whitened_error(const PoseGraphFactor& f) const {
+  const RelativePoseError error(f.measured, sqrt_information(f.information));
+  const Eigen::Quaterniond qa(poses_[f.from].linear());
+  const Eigen::Quaterniond qb(poses_[f.to].linear());
+  const Eigen::Vector3d pa = poses_[f.from].translation();
+  const Eigen::Vector3d pb = poses_[f.to].translation();
+  Eigen::Matrix<double, 6, 1> r;
+  error(qa.coeffs().data(), pa.data(), qb.coeffs().data(), pb.data(), r.data());
+  return r.norm();
+}
+
+SolveReport PoseGraph::optimize(RobustLoss loss, double scale, int max_iterations) {
+  const auto start = std::chrono::steady_clock::now();
+  SolveReport report;
+  if (loss == RobustLoss::kCauchy && scale > 0.0) {
+    // Graduated robustness: the convex Huber kernel first, so that every loop pulls with a
+    // bounded force from a far-off start, then the redescending Cauchy kernel, under which a loop
+    // that the others contradict loses its influence (Cauchy alone, started far away, can
+    // ignore true loops as well).
+    const SolveReport huber = solve(RobustLoss::kHuber, scale, max_iterations);
+    report = solve(RobustLoss::kCauchy, scale, max_iterations);
+    report.initial_cost = huber.initial_cost;
+    report.iterations += huber.iterations;
+  } else {
+    report = solve(loss, scale, max_iterations);
+  }
+  report.solve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return report;
+}
+
+SolveReport PoseGraph::solve(RobustLoss loss, double scale, int max_iterations) {
+  SolveReport report;
+  report.nodes = poses_.size();
+  report.factors = factors_.size();
+  if (poses_.size() < 2) return report;
+
+  // Parameter blocks: Eigen's quaternion layout (x, y, z, w) and the translation, per node.
+  std::vector<Eigen::Quaterniond> q(poses_.size());
+  std::vector<Eigen::Vector3d> p(poses_.size());
+  for (std::size_t i = 0; i < poses_.size(); ++i) {
+    q[i] = Eigen::Quaterniond(poses_[i].linear()).normalized();
+    p[i] = poses_[i].translation();
+  }
+
+  ceres::Problem::Options problem_options;
+#if LIOD_CERES_HAS_MANIFOLD
+  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::EigenQuaternionManifold quaternion_manifold;
+#else
+  problem_options.local_parameterization_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::EigenQuaternionParameterization quaternion_manifold;
+#endif
+  ceres::Problem problem(problem_options);
+  for (std::size_t i = 0; i < poses_.size(); ++i) {
+    problem.AddParameterBlock(q[i].coeffs().data(), 4);
+    problem.AddParameterBlock(p[i].data(), 3);
+#if LIOD_CERES_HAS_MANIFOLD
+    problem.SetManifold(q[i].coeffs().data(), &quaternion_manifold);
+#else
+    problem.SetParameterization(q[i].coeffs().data(), &quaternion_manifold);
+#endif
+    if (tilt_sigma_[i] > 0.0) {
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<TiltError, 3, 4>(new TiltError(tilt_up_[i], tilt_sigma_[i])),
+                               nullptr, q[i].coeffs().data());
+    }
+  }
+  // The prior on the first pose: held exactly, it fixes the gauge (world frame = the odometry's).
+  problem.SetParameterBlockConstant(q[0].coeffs().data());
+  problem.SetParameterBlockConstant(p[0].data());
+
+  for (const auto& f : factors_) {
+    ceres::LossFunction* robust = nullptr;
+    if (f.loop && scale > 0.0) {
+      // Scales are in sigmas of the whitened residual; Ceres' kernels take the squared norm, so
+      // the parameter is the scale itself (rho(s) = a^2 log(1 + s / a^2) for Cauchy).
+      if (loss == RobustLoss::kHuber) robust = new ceres::HuberLoss(scale);
+      if (loss == RobustLoss::kCauchy) robust = new ceres::CauchyLoss(scale);
+    }
+    auto* cost = new ceres::AutoDiffCostFunction<RelativePoseError, 6, 4, 3, 4, 3>(
+        new RelativePoseError(f.measured, sqrt_information(f.information)));
+    problem.AddResidualBlock(cost, robust, q[f.from].coeffs().data(), p[f.from].data(), q[f.to].coeffs().data(),
+                             p[f.to].data());
+  }
+
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  options.max_num_iterations = max_iterations;
+  options.num_threads = 1;  // the backend is one low-priority thread; also keeps replays deterministic
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+
+  for (std::size_t i = 0; i < poses_.size(); ++i) {
+    poses_[i].linear() = q[i].normalized().toRotationMatrix();
+    poses_[i].translation() = p[i];
+  }
+  report.iterations = static_cast<int>(summary.iterations.size());
+  report.initial_cost = summary.initial_cost;
+  report.final_cost = summary.final_cost;
+  report.converged = summary.termination_type == ceres::CONVERGENCE;
+  return report;
+}
+
+}  // namespace liod
