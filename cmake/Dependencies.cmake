@@ -6,7 +6,6 @@ find_package(CLI11 REQUIRED)
 find_package(nlohmann_json 3 REQUIRED)
 find_package(Threads REQUIRED)
 find_package(PkgConfig REQUIRED)
-pkg_check_modules(PCAP REQUIRED IMPORTED_TARGET libpcap)
 pkg_check_modules(SYSTEMD REQUIRED IMPORTED_TARGET libsystemd)
 pkg_check_modules(GPIOD REQUIRED IMPORTED_TARGET libgpiod)
 find_path(STB_INCLUDE_DIR stb_image_write.h PATH_SUFFIXES stb REQUIRED)
@@ -14,4 +13,4 @@ if(LIOD_BUILD_TESTS)
   find_package(GTest REQUIRED)
   find_package(benchmark REQUIRED)
 endif()
-# Ceres and PCL are found where they are used (backend, map I/O), to keep their slow headers contained.
+# Ceres is found where it is used (the backend library), to keep its slow headers contained.

@@ -2,7 +2,7 @@
 add_library(liod_warnings INTERFACE)
 target_compile_options(liod_warnings INTERFACE
   -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Wcast-align -Wunused
-  -Woverloaded-virtual -Wnull-dereference -Wdouble-promotion -Wformat=2 -Wimplicit-fallthrough)
+  -Woverloaded-virtual -Wdouble-promotion -Wformat=2 -Wimplicit-fallthrough)
 
 if(LIOD_SANITIZE)
   string(REPLACE ";" "," _liod_san "${LIOD_SANITIZE}")

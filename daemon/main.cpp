@@ -10,6 +10,7 @@
 #include "liod/daemon/decode_command.hpp"
 #include "liod/daemon/logging.hpp"
 #include "liod/daemon/replay.hpp"
+#include "liod/daemon/run_command.hpp"
 
 namespace {
 
@@ -53,6 +54,32 @@ int main(int argc, char** argv) {
   replay->add_option("--scan-log", replay_options.scan_log_csv, "output: per-scan status, features and timings (CSV)");
   replay->add_flag("!--no-progress", replay_options.progress, "no progress bar (one is drawn only on a terminal)");
   replay_options.progress = true;
+  replay->add_option("--pace", replay_options.pace, "replay at this multiple of the recorded pace (1 = as recorded); default: as fast as possible, deterministic")->check(CLI::Range(0.0, 1000.0));
+  replay->add_option("--pose-socket", replay_options.pose_socket, "also serve the poses on this Unix socket (see docs/pose-protocol.md)");
+
+  auto* run = app.add_subcommand("run", "The live daemon: sensor drivers, odometry, pose socket (systemd: Type=notify)");
+  std::vector<std::string> run_configs;
+  liod::RunOptions run_options;
+  run->add_option("--config", run_configs, "configuration file(s), later ones override")->required()->check(CLI::ExistingFile);
+  run->add_option("--max-seconds", run_options.max_seconds, "stop by itself after this long (tests)");
+
+  auto* record = app.add_subcommand("record", "Run live and also write what the drivers receive (lidar.pcap + imu.csv) for replay");
+  std::vector<std::string> record_configs;
+  liod::RunOptions record_options;
+  record->add_option("--config", record_configs, "configuration file(s), later ones override")->required()->check(CLI::ExistingFile);
+  record->add_option("--out", record_options.record_dir, "output directory (created)")->required();
+  record->add_option("--max-seconds", record_options.max_seconds, "stop by itself after this long");
+
+  auto* pose = app.add_subcommand("pose", "Print the poses a running liod publishes");
+  liod::PoseCommandOptions pose_options;
+  std::vector<std::string> pose_configs;
+  pose->add_option("--socket", pose_options.socket, "pose socket path (default: output.pose_socket of --config, else /run/liod/pose.sock)");
+  pose->add_option("--config", pose_configs, "configuration file(s) to take the socket path from")->check(CLI::ExistingFile);
+  pose->add_flag("--json", pose_options.json, "JSON lines (the server's text mode)");
+  pose->add_flag("--scan-only", pose_options.scan_only, "scan-rate poses only");
+  pose->add_flag("--health", pose_options.health, "also print health messages");
+  pose->add_option("--count", pose_options.count, "exit after this many poses");
+  pose->add_option("--timeout", pose_options.timeout_s, "exit after this many seconds without a message");
 
   CLI11_PARSE(app, argc, argv);
 
@@ -64,6 +91,17 @@ int main(int argc, char** argv) {
       const liod::Config config = liod::load_config(replay_configs);
       if (log_level.empty()) spdlog::set_level(spdlog::level::from_str(config.log.level));
       return liod::run_replay(config, replay_options, std::cout);
+    }
+    if (*run || *record) {
+      const liod::Config config = liod::load_config(*run ? run_configs : record_configs);
+      if (log_level.empty()) spdlog::set_level(spdlog::level::from_str(config.log.level));
+      return liod::run_daemon(config, *run ? run_options : record_options);
+    }
+    if (*pose) {
+      if (pose_options.socket.empty()) {
+        pose_options.socket = pose_configs.empty() ? liod::Config{}.output.pose_socket : liod::load_config(pose_configs).output.pose_socket;
+      }
+      return liod::run_pose_client(pose_options, std::cout);
     }
   } catch (const liod::ConfigError& e) {
     spdlog::error("{}", e.what());

@@ -16,7 +16,7 @@ while [ $# -gt 0 ]; do
     *) echo "ablation.sh: unknown option $1" >&2; exit 2 ;;
   esac
 done
-bin=build/bin
+bin=${LIOD_BIN:-build/bin}
 mkdir -p "$work"
 
 variants=(
@@ -32,6 +32,7 @@ printf '|---|---|---|---|---|---|\n'
 for route in $routes; do
   for seed in $seeds; do
     drive="$work/${route}_s${seed}"
+    mkdir -p "$drive"
     if [ ! -f "$drive/groundtruth.tum" ]; then
       "$bin/liod-sim" --route "$route" --seed "$seed" --duration "$duration" --max-speed "$speed" --out "$drive" >/dev/null
     fi

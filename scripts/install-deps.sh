@@ -1,15 +1,15 @@
 #!/usr/bin/env bash
-# Installs liod's build and test dependencies from Debian/Ubuntu packages.
+# Installs liod's build and test dependencies from Debian/Ubuntu packages. (PCD files and pcap
+# captures are read and written by liod's own small code, so PCL and libpcap are not needed.)
 # Idempotent: packages already present are skipped; safe to run again.
 set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config git
-  libeigen3-dev libceres-dev libpcl-dev
-  libboost-dev libboost-system-dev
+  libeigen3-dev libceres-dev
   libspdlog-dev libfmt-dev libyaml-cpp-dev
   libgpiod-dev libsystemd-dev
-  libpcap-dev libcli11-dev nlohmann-json3-dev
+  libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev libstb-dev
   python3
 )

@@ -258,7 +258,33 @@ Schema declare_schema(Config& c) {
   s.real("odometry.init_velocity_std", &o.init_velocity_std, 1e-3, 100.0);
   s.real("odometry.init_tilt_std_deg", &o.init_tilt_std_deg, 0.01, 45.0);
 
-  s.boolean("backend.enabled", &c.backend.enabled);
+  auto& b = c.backend;
+  s.boolean("backend.enabled", &b.enabled);
+  s.real("backend.loop_radius_m", &b.loop_radius_m, 0.5, 1000.0);
+  s.real("backend.loop_time_gap_s", &b.loop_time_gap_s, 0.0, 86400.0);
+  s.choice("backend.loop_distance", &b.loop_distance, {{"2d", LoopDistance::k2D}, {"3d", LoopDistance::k3D}});
+  s.integer("backend.loop_candidates", &b.loop_candidates, 1, 20);
+  s.integer("backend.loop_cooldown_keyframes", &b.loop_cooldown_keyframes, 0, 10000);
+  s.integer("backend.submap_keyframes", &b.submap_keyframes, 1, 200);
+  s.boolean("backend.similarity_check", &b.similarity_check);
+  s.real("backend.similarity_threshold_m", &b.similarity_threshold_m, 0.05, 50.0);
+  s.real("backend.similarity_quantile", &b.similarity_quantile, 0.1, 1.0);
+  s.real("backend.similarity_search_m", &b.similarity_search_m, 0.0, 20.0);
+  s.real("backend.similarity_search_yaw_deg", &b.similarity_search_yaw_deg, 0.0, 45.0);
+  s.real("backend.loop_max_rms_m", &b.loop_max_rms_m, 0.005, 5.0);
+  s.real("backend.loop_min_inlier_fraction", &b.loop_min_inlier_fraction, 0.0, 1.0);
+  s.real("backend.max_vertical_m", &b.max_vertical_m, 0.05, 100.0);
+  s.real("backend.max_tilt_deg", &b.max_tilt_deg, 0.05, 90.0);
+  s.real("backend.robust_loss_scale", &b.robust_loss_scale, 0.0, 1000.0);
+  s.real("backend.odometry_translation_sigma_m", &b.odometry_translation_sigma_m, 1e-4, 100.0);
+  s.real("backend.odometry_rotation_sigma_deg", &b.odometry_rotation_sigma_deg, 1e-4, 90.0);
+  s.real("backend.loop_translation_sigma_m", &b.loop_translation_sigma_m, 1e-4, 100.0);
+  s.real("backend.loop_rotation_sigma_deg", &b.loop_rotation_sigma_deg, 1e-4, 90.0);
+  s.real("backend.tilt_sigma_deg", &b.tilt_sigma_deg, 0.0, 90.0);
+  s.integer("backend.max_solver_iterations", &b.max_solver_iterations, 1, 10000);
+  s.real("backend.keyframe_voxel_m", &b.keyframe_voxel_m, 0.01, 10.0);
+  s.real("backend.map_voxel_m", &b.map_voxel_m, 0.01, 10.0);
+  s.boolean("backend.persist", &b.persist);
   s.text("output.pose_socket", &c.output.pose_socket);
   s.text("output.state_dir", &c.output.state_dir);
 

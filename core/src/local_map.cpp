@@ -134,12 +134,14 @@ int LocalMap::nearest(const Eigen::Vector3d& query, int k, double max_distance,
   int found = 0;
   float worst = static_cast<float>(max_distance * max_distance);
   const Eigen::Vector3f q = query.cast<float>();
-  const VoxelKey centre = voxel_of(query, inverse_voxel_size_);
-  // One ring of voxels is exact for max_distance <= voxel size (the configuration enforces it).
-  for (int dx = -1; dx <= 1; ++dx) {
-    for (int dy = -1; dy <= 1; ++dy) {
-      for (int dz = -1; dz <= 1; ++dz) {
-        const Voxel* voxel = find({centre.x + dx, centre.y + dy, centre.z + dz});
+  // Only the voxels that overlap the query's gate box can hold a neighbour: 1 to 8 of them for a
+  // gate up to half a voxel, at most 27 for a gate up to a whole one (the configuration's limit).
+  const VoxelKey lo = voxel_of(query - Eigen::Vector3d::Constant(max_distance), inverse_voxel_size_);
+  const VoxelKey hi = voxel_of(query + Eigen::Vector3d::Constant(max_distance), inverse_voxel_size_);
+  for (int dx = lo.x; dx <= hi.x; ++dx) {
+    for (int dy = lo.y; dy <= hi.y; ++dy) {
+      for (int dz = lo.z; dz <= hi.z; ++dz) {
+        const Voxel* voxel = find({dx, dy, dz});
         if (voxel == nullptr) continue;
         for (std::uint32_t j = 0; j < voxel->count; ++j) {
           const float d2 = (voxel->points[j] - q).squaredNorm();

@@ -1,36 +1,24 @@
 #include "liod/daemon/replay.hpp"
 
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <ostream>
 #include <stdexcept>
-#include <unistd.h>
+#include <thread>
 
+#include "liod/daemon/pipeline.hpp"
+#include "liod/daemon/sources.hpp"
 #include "liod/daemon/trajectory_writer.hpp"
-#include "liod/drivers/imu_csv.hpp"
-#include "liod/drivers/pcap_reader.hpp"
-#include "liod/drivers/rs_helios.hpp"
-#include "liod/lidar_inertial_odometry.hpp"
 
 namespace liod {
 namespace {
-
-drivers::HeliosOptions helios_options(const Config& config) {
-  drivers::HeliosOptions o;
-  o.model = config.lidar.model == LidarModel::kHelios16P ? drivers::HeliosModel::Helios16P : drivers::HeliosModel::Helios5515;
-  if (!config.lidar.angles_csv.empty()) o.angles = drivers::load_angles_csv(config.lidar.angles_csv);
-  o.msop.min_range_m = static_cast<float>(config.lidar.min_range_m);
-  o.msop.max_range_m = static_cast<float>(config.lidar.max_range_m);
-  o.split_azimuth_deg = config.lidar.split_azimuth_deg;
-  return o;
-}
 
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
@@ -41,15 +29,16 @@ double percentile(std::vector<double> v, double q) {
 class ProgressBar {
  public:
   ProgressBar(bool enabled, std::uintmax_t total) : enabled_(enabled && isatty(STDERR_FILENO)), total_(total) {}
-  void update(std::uintmax_t done, std::size_t scans) {
+  void update(std::uintmax_t done, std::uint64_t scans) {
     if (!enabled_ || total_ == 0) return;
-    const int percent = static_cast<int>(100.0 * static_cast<double>(done) / static_cast<double>(total_));
+    const int percent = static_cast<int>(100.0 * static_cast<double>(std::min(done, total_)) / static_cast<double>(total_));
     if (percent == last_) return;
     last_ = percent;
     const int width = 40;
     const int filled = percent * width / 100;
-    std::fprintf(stderr, "\r[%s%s] %3d%%  %zu scans", std::string(static_cast<std::size_t>(filled), '#').c_str(),
-                 std::string(static_cast<std::size_t>(width - filled), '.').c_str(), percent, scans);
+    std::fprintf(stderr, "\r[%s%s] %3d%%  %llu scans", std::string(static_cast<std::size_t>(filled), '#').c_str(),
+                 std::string(static_cast<std::size_t>(width - filled), '.').c_str(), percent,
+                 static_cast<unsigned long long>(scans));
   }
   void finish() {
     if (enabled_) std::fprintf(stderr, "\n");
@@ -65,10 +54,16 @@ class ProgressBar {
 
 int run_replay(const Config& config, const ReplayOptions& options, std::ostream& out) {
   const auto wall_start = std::chrono::steady_clock::now();
-  drivers::PcapReader pcap(options.pcap);
-  pcap.set_port_filter({static_cast<std::uint16_t>(config.lidar.msop_port), static_cast<std::uint16_t>(config.lidar.difop_port)});
-  drivers::ImuCsvReader imu(options.imu_csv);
-  LidarInertialOdometry odometry(config);
+  const std::vector<std::uint16_t> ports{static_cast<std::uint16_t>(config.lidar.msop_port),
+                                         static_cast<std::uint16_t>(config.lidar.difop_port)};
+  // Both file sources share one pace clock anchored at the earlier of the two first stamps, so
+  // a paced replay keeps the recorded interleaving of LiDAR and IMU.
+  auto pace = std::make_shared<PaceClock>();
+  pace->pace = options.pace;
+  const std::int64_t t_lidar = first_pcap_time_ns(options.pcap, ports);
+  const std::int64_t t_imu = first_imu_time_ns(options.imu_csv);
+  pace->data_start_ns = (t_lidar == 0 || t_imu == 0) ? std::max(t_lidar, t_imu) : std::min(t_lidar, t_imu);
+
   TrajectoryWriter trajectory(options.trajectory_tum);
   std::unique_ptr<TrajectoryWriter> imu_rate;
   if (!options.imu_rate_tum.empty()) imu_rate = std::make_unique<TrajectoryWriter>(options.imu_rate_tum);
@@ -80,88 +75,76 @@ int run_replay(const Config& config, const ReplayOptions& options, std::ostream&
                 "deskew_ms,features_ms,registration_ms,map_ms\n";
   }
 
-  std::deque<Scan> pending;
-  drivers::RsHeliosDecoder decoder(helios_options(config), [&](Scan& scan, const drivers::SweepInfo&) {
-    pending.push_back(std::move(scan));
-  });
-
-  ImuSample sample;
-  bool imu_left = imu.next(sample);
-  std::size_t imu_count = 0;
-  auto feed_imu_until = [&](double time) {
-    while (imu_left && sample.time <= time) {
-      odometry.add_imu(sample);
-      ++imu_count;
-      if (imu_rate) {
-        if (const auto s = odometry.propagated_state()) imu_rate->write(*s);
-      }
-      imu_left = imu.next(sample);
+  PipelineOptions po;
+  po.ordering = options.pace > 0.0 ? Ordering::Arrival : Ordering::Lockstep;
+  po.imu_rate_poses = imu_rate != nullptr || (!options.pose_socket.empty() && config.pose_socket.imu_rate);
+  po.pose_socket = options.pose_socket;
+  po.realtime_threads = options.pace > 0.0;  // a bench replay as fast as possible needs no RT priorities
+  Pipeline pipeline(config, po);
+  // With the backend, the scan poses are kept and written corrected once the drive is over
+  // (every loop known): the same file on every run, whatever the threads' timing.
+  std::vector<NavState> scan_poses;
+  // Sinks run on the publisher thread, in pose order.
+  pipeline.add_sink([&](const PoseEvent& ev) {
+    const auto& m = ev.message;
+    if (m.type == pose::MessageType::ImuPose) {
+      if (imu_rate) imu_rate->write(m.time, m.position, m.orientation);
+      return;
     }
-  };
+    if (pipeline.backend() != nullptr) {
+      NavState s;
+      s.time = m.time;
+      s.position = m.position;
+      s.rotation = m.orientation.toRotationMatrix();
+      scan_poses.push_back(s);
+    } else {
+      trajectory.write(m.time, m.position, m.orientation);
+    }
+    if (scan_log) {
+      const auto& d = ev.diagnostics;
+      scan_log << std::fixed << std::setprecision(6) << m.time << ',' << d.status << ',' << d.points << ',' << d.edges
+               << ',' << d.planes << ',' << d.residuals << ',' << d.iterations << ',' << std::setprecision(4) << d.rms_m
+               << ',' << d.min_eigenvalue << ',' << d.hausdorff_m << ',' << d.deskew_ms << ',' << d.features_ms << ','
+               << d.registration_ms << ',' << d.map_ms << '\n';
+    }
+  });
+  auto pcap_source = std::make_unique<PcapLidarSource>(options.pcap, ports, pace);
+  PcapLidarSource* pcap = pcap_source.get();
+  pace->host_start_steady_ns = steady_ns();
+  pipeline.start(std::move(pcap_source), std::make_unique<CsvImuSource>(options.imu_csv, pace));
 
-  std::vector<double> front_end_ms;
-  std::size_t scans = 0;
-  std::size_t processed = 0;
-  std::size_t degenerate = 0;
-  std::size_t keyframes = 0;
   const auto total_bytes = std::filesystem::file_size(options.pcap);
   ProgressBar progress(options.progress, total_bytes);
-  std::uintmax_t bytes = 0;
-
-  auto process_ready = [&](bool final) {
-    while (!pending.empty()) {
-      const double end = odometry.scan_end_time(pending.front());
-      // A scan needs the IMU to reach its end; at the end of the log it gets what there is.
-      feed_imu_until(end + 0.02);
-      if (!final && imu_left && odometry.latest_imu_time() < end) return;
-      ++scans;
-      const auto result = odometry.process(pending.front());
-      pending.pop_front();
-      if (!result) continue;
-      ++processed;
-      const double ms = result->deskew_ms + result->features_ms + result->registration_ms;
-      front_end_ms.push_back(ms);
-      if (result->status & kStatusDegenerate) ++degenerate;
-      if (result->status & kStatusKeyframe) ++keyframes;
-      trajectory.write(result->state);
-      if (scan_log) {
-        scan_log << std::fixed << std::setprecision(6) << result->state.time << ',' << result->status << ','
-                 << result->points << ',' << result->edge_features << ',' << result->plane_features << ','
-                 << result->residuals << ',' << result->iterations << ',' << std::setprecision(4)
-                 << result->rms_residual_m << ',' << result->min_translation_eigenvalue << ','
-                 << result->hausdorff_m << ',' << result->deskew_ms << ',' << result->features_ms << ','
-                 << result->registration_ms << ',' << result->map_ms << '\n';
-      }
-    }
-  };
-
-  drivers::UdpDatagram datagram;
-  while (pcap.next(datagram)) {
-    bytes += datagram.payload.size() + 58;
-    decoder.feed(datagram.payload, datagram.capture_time_ns);
-    process_ready(false);
-    progress.update(bytes, scans);
+  while (!pipeline.finished() && pipeline.error().empty()) {
+    progress.update(pcap->bytes_read(), pipeline.lidar_output().sweeps());
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  decoder.flush();
-  process_ready(true);
-  progress.update(total_bytes, scans);
+  pipeline.join();
+  progress.update(total_bytes, pipeline.lidar_output().sweeps());
   progress.finish();
+  if (!pipeline.error().empty()) throw std::runtime_error(pipeline.error());
 
+  const auto& t = pipeline.totals();
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  const auto& ps = pcap.stats();
-  const auto hs = decoder.stats();
-  if (!pcap.error().empty()) spdlog::warn("{}: {}", options.pcap, pcap.error());
-  out << "replay: " << scans << " scans (" << processed << " with a pose, " << keyframes << " keyframes, " << degenerate
-      << " degenerate), " << imu_count << " IMU samples (" << odometry.dropped_imu_samples() << " dropped)\n";
+  const auto& ps = pcap->stats();
+  const auto hs = pipeline.lidar_output().decoder_stats();
+  if (!pcap->read_error().empty()) spdlog::warn("{}: {}", options.pcap, pcap->read_error());
+  out << "replay: " << t.scans << " scans (" << t.processed << " with a pose, " << t.keyframes << " keyframes, "
+      << t.degenerate << " degenerate), " << t.imu_fed << " IMU samples (" << t.imu_dropped << " dropped)\n";
   out << "packets: " << hs.msop << " MSOP, " << hs.difop << " DIFOP, " << hs.rejected() << " rejected, "
       << ps.dropped() << " dropped by the pcap reader\n";
   out << std::fixed << std::setprecision(2) << "front end per scan (deskew + features + registration): median "
-      << percentile(front_end_ms, 0.5) << " ms, p99 " << percentile(front_end_ms, 0.99) << " ms\n";
-  const double drive_s = scans > 0 ? static_cast<double>(scans) * 0.1 : 0.0;
+      << percentile(t.front_end_ms, 0.5) << " ms, p99 " << percentile(t.front_end_ms, 0.99) << " ms\n";
+  const double drive_s = t.scans > 0 ? static_cast<double>(t.scans) * 0.1 : 0.0;
   out << "wall time " << wall_s << " s for " << drive_s << " s of data (" << (wall_s > 0 ? drive_s / wall_s : 0.0)
       << "x real time)\n";
+  if (BackendWorker* backend = pipeline.backend()) {
+    for (const auto& s : backend->backend().corrected_trajectory(scan_poses)) trajectory.write(s);
+    trajectory.flush();
+    out << backend->summary();
+  }
   out << "trajectory: " << options.trajectory_tum << '\n';
-  if (processed == 0) {
+  if (t.processed == 0) {
     spdlog::error("no pose was estimated: check that the IMU log and the pcap cover the same time span");
     return 1;
   }

@@ -10,10 +10,13 @@ TrajectoryWriter::TrajectoryWriter(const std::string& path) : file_(std::fopen(p
   std::fprintf(file_.get(), "# t x y z qx qy qz qw (body/IMU frame in the gravity-aligned world)\n");
 }
 
-void TrajectoryWriter::write(const NavState& s) {
-  const Eigen::Quaterniond q(s.rotation);
-  std::fprintf(file_.get(), "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", s.time, s.position.x(), s.position.y(),
-               s.position.z(), q.x(), q.y(), q.z(), q.w());
+void TrajectoryWriter::write(const NavState& s) { write(s.time, s.position, Eigen::Quaterniond(s.rotation)); }
+
+void TrajectoryWriter::write(double time, const Eigen::Vector3d& p, const Eigen::Quaterniond& q) {
+  std::fprintf(file_.get(), "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", time, p.x(), p.y(), p.z(), q.x(), q.y(), q.z(),
+               q.w());
 }
+
+void TrajectoryWriter::flush() { std::fflush(file_.get()); }
 
 }  // namespace liod

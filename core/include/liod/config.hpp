@@ -70,7 +70,7 @@ struct OdometryConfig {
   double map_min_point_spacing_m = 0.2;
   int max_iterations = 5;
   double lidar_noise_m = 0.03;       // std of a point-to-plane/line residual
-  double max_correspondence_m = 1.0;
+  double max_correspondence_m = 0.5;
   double keyframe_distance_m = 1.0;
   double keyframe_angle_deg = 10.0;
   double hausdorff_threshold_m = 0.6; // h1

@@ -132,66 +132,120 @@ double partial_hausdorff(const std::vector<Eigen::Vector3d>& a, const std::vecto
   return std::max(partial_directed_hausdorff(a, b, quantile, cap), partial_directed_hausdorff(b, a, quantile, cap));
 }
 
+namespace {
+
+// Points of structure: more than kMinHeight above the lowest point of their x-y cell. The
+// ground matches the ground of any other place, so with it in the test a partial Hausdorff
+// distance would call most pairs of places similar; structure (walls, poles, cars) is what
+// tells places apart. Local per cell, so that slopes are not mistaken for structure.
+std::vector<Eigen::Vector3d> structure_points(const std::vector<Eigen::Vector3d>& cloud) {
+  constexpr double kCell = 2.0;
+  constexpr double kMinHeight = 0.4;
+  constexpr std::size_t kMinPoints = 30;
+  std::unordered_map<VoxelKey, double, VoxelKeyHash> lowest;
+  auto cell = [&](const Eigen::Vector3d& p) {
+    return VoxelKey{static_cast<std::int32_t>(std::floor(p.x() / kCell)), static_cast<std::int32_t>(std::floor(p.y() / kCell)), 0};
+  };
+  for (const auto& p : cloud) {
+    auto [it, inserted] = lowest.try_emplace(cell(p), p.z());
+    if (!inserted) it->second = std::min(it->second, p.z());
+  }
+  std::vector<Eigen::Vector3d> out;
+  for (const auto& p : cloud) {
+    if (p.z() > lowest[cell(p)] + kMinHeight) out.push_back(p);
+  }
+  return out.size() >= kMinPoints ? out : cloud;
+}
+
+}  // namespace
+
 SimilarityResult similarity_search(const std::vector<Eigen::Vector3d>& cloud_body, const Eigen::Isometry3d& guess,
-                                   const std::vector<Eigen::Vector3d>& submap_world, const BackendConfig& config) {
+                                   const std::vector<Eigen::Vector3d>& submap_world,
+                                   const std::vector<Eigen::Vector3d>& candidate_world, const BackendConfig& config) {
   const double q = config.similarity_quantile;
   // Distances beyond twice the threshold only need to be known as "too far".
   const double cap = std::max(2.0 * config.similarity_threshold_m, 0.5);
-  const NearestGrid grid(submap_world, cap);
+  const std::vector<Eigen::Vector3d> submap = structure_points(submap_world);
+  const NearestGrid grid(submap, cap);
   std::vector<double> scratch;
   const Eigen::Vector3d centre = guess.translation();
 
-  // Coarse grid: 1 m in x-y (the sub-map's similarity cloud is ~1 m voxels), the yaw limits,
-  // and z in steps of half the vertical limit (a larger z offset is rejected later anyway).
-  const double step = 1.0;
-  const int nxy = static_cast<int>(std::floor(config.similarity_search_m / step));
+  // The scan's structure in the world at the guess, relative to the keyframe's position.
+  std::vector<Eigen::Vector3d> world(cloud_body.size());
+  for (std::size_t i = 0; i < cloud_body.size(); ++i) world[i] = guess * cloud_body[i];
+  const std::vector<Eigen::Vector3d> scan = structure_points(world);
+  // The search scores a deterministic subset (every k-th point): enough for a quantile.
+  constexpr std::size_t kSearchPoints = 400;
+  const std::size_t stride = std::max<std::size_t>(1, scan.size() / kSearchPoints);
+  std::vector<Eigen::Vector3d> base;
+  for (std::size_t i = 0; i < scan.size(); i += stride) base.push_back(scan[i] - centre);
+
+  struct Hypothesis {
+    double x = 0, y = 0, z = 0, yaw = 0;
+  };
+  std::vector<Eigen::Vector3d> moved(base.size());
+  auto score = [&](const Hypothesis& h) {
+    const Eigen::Matrix3d r = Eigen::AngleAxisd(h.yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const Eigen::Vector3d t = centre + Eigen::Vector3d(h.x, h.y, h.z);
+    for (std::size_t i = 0; i < base.size(); ++i) moved[i] = r * base[i] + t;
+    // Ties go to the smaller offset (the odometry's guess is the prior).
+    return partial_directed(moved, grid, q, cap, scratch) + 1e-6 * std::hypot(h.x, h.y, h.z);
+  };
+  Hypothesis best;
+  double best_score = score(best);
+  auto consider = [&](const Hypothesis& h) {
+    const double d = score(h);
+    if (d < best_score) {
+      best_score = d;
+      best = h;
+    }
+  };
+  // Coarse to fine: x-y on a 1 m grid (the clouds are ~1 m voxels), then yaw, then z in steps
+  // of half the vertical limit (a larger z offset would be rejected later anyway), then x-y on
+  // a 0.5 m grid around the best.
+  const int nxy = static_cast<int>(std::floor(config.similarity_search_m));
+  for (int ix = -nxy; ix <= nxy; ++ix) {
+    for (int iy = -nxy; iy <= nxy; ++iy) consider({static_cast<double>(ix), static_cast<double>(iy), 0.0, 0.0});
+  }
   const double yaw_limit = config.similarity_search_yaw_deg * kDegToRad;
-  const int nyaw = yaw_limit > 0.0 ? 2 : 0;
-  const double z_step = 0.5 * config.max_vertical_m;
-  SimilarityResult best;
-  best.distance_m = std::numeric_limits<double>::infinity();
-  best.aligned = guess;
-  std::vector<Eigen::Vector3d> moved(cloud_body.size());
-  std::vector<Eigen::Vector3d> base(cloud_body.size());
-  for (std::size_t i = 0; i < cloud_body.size(); ++i) base[i] = guess * cloud_body[i] - centre;
-  for (int iyaw = -nyaw; iyaw <= nyaw; ++iyaw) {
-    const double yaw = nyaw > 0 ? yaw_limit * iyaw / nyaw : 0.0;
-    const Eigen::Matrix3d r = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    for (int iz = -1; iz <= 1; ++iz) {
-      for (int ix = -nxy; ix <= nxy; ++ix) {
-        for (int iy = -nxy; iy <= nxy; ++iy) {
-          const Eigen::Vector3d offset(ix * step, iy * step, iz * z_step);
-          for (std::size_t i = 0; i < base.size(); ++i) moved[i] = r * base[i] + centre + offset;
-          const double d = partial_directed(moved, grid, q, cap, scratch);
-          // Ties go to the smaller offset (the odometry's guess is the prior).
-          const double tie = 1e-6 * offset.norm();
-          if (d + tie < best.distance_m) {
-            best.distance_m = d + tie;
-            Eigen::Isometry3d delta = Eigen::Isometry3d::Identity();
-            delta.linear() = r;
-            delta.translation() = centre + offset - r * centre;  // rotate about the keyframe's position
-            best.aligned = delta * guess;
-          }
-        }
-      }
+  const Hypothesis after_xy = best;
+  for (int k = -2; k <= 2; ++k) {
+    if (k != 0 && yaw_limit > 0.0) consider({after_xy.x, after_xy.y, 0.0, yaw_limit * k / 2.0});
+  }
+  const Hypothesis after_yaw = best;
+  for (int k : {-1, 1}) consider({after_yaw.x, after_yaw.y, 0.5 * config.max_vertical_m * k, after_yaw.yaw});
+  const Hypothesis after_z = best;
+  for (int ix = -1; ix <= 1; ++ix) {
+    for (int iy = -1; iy <= 1; ++iy) {
+      if (ix != 0 || iy != 0) consider({after_z.x + 0.5 * ix, after_z.y + 0.5 * iy, after_z.z, after_z.yaw});
     }
   }
-  // The reverse direction at the best alignment: the sub-map's points within the scan's
-  // horizontal reach must be explained by the scan too (a different place rarely is).
-  std::vector<Eigen::Vector3d> aligned(cloud_body.size());
+
+  SimilarityResult result;
+  Eigen::Isometry3d delta = Eigen::Isometry3d::Identity();
+  delta.linear() = Eigen::AngleAxisd(best.yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  delta.translation() = centre + Eigen::Vector3d(best.x, best.y, best.z) - delta.linear() * centre;  // about the keyframe
+  result.aligned = delta * guess;
+
+  // Both directions at the best alignment, on all structure points: the scan explained by the
+  // sub-map, and the candidate keyframe explained by the scan. The reverse direction uses the
+  // candidate alone, not the sub-map, which covers far more than one scan sees; both are single
+  // scans from nearby places, cropped to the current scan's horizontal reach.
+  std::vector<Eigen::Vector3d> aligned;
+  aligned.reserve(scan.size());
   double reach = 0.0;
-  for (std::size_t i = 0; i < cloud_body.size(); ++i) {
-    aligned[i] = best.aligned * cloud_body[i];
-    reach = std::max(reach, (aligned[i] - best.aligned.translation()).head<2>().norm());
+  for (const auto& p : scan) {
+    aligned.push_back(delta * p);
+    reach = std::max(reach, (aligned.back() - result.aligned.translation()).head<2>().norm());
   }
   std::vector<Eigen::Vector3d> cropped;
-  for (const auto& p : submap_world) {
-    if ((p - best.aligned.translation()).head<2>().norm() <= reach) cropped.push_back(p);
+  for (const auto& p : structure_points(candidate_world)) {
+    if ((p - result.aligned.translation()).head<2>().norm() <= reach) cropped.push_back(p);
   }
-  const double forward = partial_directed(aligned, grid, q, cap, scratch);
-  const double backward = partial_directed(cropped, NearestGrid(aligned, cap), q, cap, scratch);
-  best.distance_m = std::max(forward, backward);
-  return best;
+  result.forward_m = partial_directed(aligned, grid, q, cap, scratch);
+  result.backward_m = partial_directed(cropped, NearestGrid(aligned, cap), q, cap, scratch);
+  result.distance_m = std::max(result.forward_m, result.backward_m);
+  return result;
 }
 
 LoopCheck check_loop(const std::vector<BackendKeyframe>& keyframes, const std::vector<Eigen::Isometry3d>& poses,
@@ -227,8 +281,11 @@ LoopCheck check_loop(const std::vector<BackendKeyframe>& keyframes, const std::v
   const Eigen::Isometry3d guess = poses[current];
   Eigen::Isometry3d initial = guess;
   if (b.similarity_check) {
-    const auto similarity = similarity_search(to_double(keyframes[current].similarity), guess, submap_similarity, b);
+    const auto similarity = similarity_search(to_double(keyframes[current].similarity), guess, submap_similarity,
+                                              to_world(keyframes[candidate].similarity, poses[candidate]), b);
     check.similarity_m = similarity.distance_m;
+    check.similarity_forward_m = similarity.forward_m;
+    check.similarity_backward_m = similarity.backward_m;
     if (similarity.distance_m > b.similarity_threshold_m) return done(LoopOutcome::kDissimilar);
     initial = similarity.aligned;
   }
@@ -249,12 +306,17 @@ LoopCheck check_loop(const std::vector<BackendKeyframe>& keyframes, const std::v
   x.rotation = initial.linear();
   x.position = initial.translation();
   UpdateResult result;
-  constexpr int kRounds = 4;
+  // Coarse to fine gate: the first rounds search neighbours as far as the map's voxel allows
+  // (the coarse alignment leaves up to ~0.5 m), the last ones at the front end's gate.
+  constexpr int kRounds = 5;
+  const double fine_gate = config.odometry.max_correspondence_m;
+  const double coarse_gate = std::max(fine_gate, config.odometry.map_voxel_m);
   for (int round = 0; round < kRounds; ++round) {
+    params.correspondence.max_distance_m = round < 2 ? coarse_gate : fine_gate;
     result = iterated_update(x, weak, planes, plane_map, edges, edge_map, params);
     const Eigen::Matrix<double, 15, 1> moved = boxminus(result.state, x);
     x = result.state;
-    if (moved.segment<3>(0).norm() < 0.05 * kDegToRad && moved.segment<3>(3).norm() < 0.01) {
+    if (round >= 2 && moved.segment<3>(0).norm() < 0.05 * kDegToRad && moved.segment<3>(3).norm() < 0.01) {
       check.converged = true;
       break;
     }

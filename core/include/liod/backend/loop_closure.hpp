@@ -46,16 +46,22 @@ double partial_hausdorff(const std::vector<Eigen::Vector3d>& a, const std::vecto
                          double cap);
 
 struct SimilarityResult {
-  double distance_m = 0.0;  // partial Hausdorff distance at the best alignment
+  double distance_m = 0.0;  // partial Hausdorff distance at the best alignment: max of the two below
+  double forward_m = 0.0;   // h_q(scan, sub-map)
+  double backward_m = 0.0;  // h_q(candidate keyframe, scan)
   Eigen::Isometry3d aligned = Eigen::Isometry3d::Identity();  // T_world_body of the best alignment
 };
 
 /// Searches x, y (+- config.similarity_search_m), yaw (+- similarity_search_yaw_deg) and a small
 /// z offset (+- max_vertical_m / 2) around `guess` for the alignment of `cloud_body` that best
-/// matches `submap_world`, then scores it with the bidirectional partial Hausdorff distance
-/// (the sub-map cropped to the scan's horizontal reach, since it covers more than one scan).
+/// matches `submap_world`, then scores it with the bidirectional partial Hausdorff distance:
+/// scan -> sub-map, and candidate keyframe -> scan (the sub-map covers far more than one scan
+/// sees, so the reverse direction uses the candidate's own cloud within the scan's reach).
+/// Only structure takes part (points > 0.4 m above the lowest point of their 2 m x-y cell): the
+/// ground of one place matches the ground of any other.
 SimilarityResult similarity_search(const std::vector<Eigen::Vector3d>& cloud_body, const Eigen::Isometry3d& guess,
-                                   const std::vector<Eigen::Vector3d>& submap_world, const BackendConfig& config);
+                                   const std::vector<Eigen::Vector3d>& submap_world,
+                                   const std::vector<Eigen::Vector3d>& candidate_world, const BackendConfig& config);
 
 enum class LoopOutcome {
   kAccepted,
@@ -72,6 +78,8 @@ struct LoopCheck {
   std::size_t current = 0;    // node indices
   std::size_t candidate = 0;
   double similarity_m = -1.0;
+  double similarity_forward_m = -1.0;
+  double similarity_backward_m = -1.0;
   double rms_m = 0.0;
   double inlier_fraction = 0.0;
   int degenerate_directions = 0;

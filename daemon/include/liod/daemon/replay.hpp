@@ -1,6 +1,8 @@
 #pragma once
-// `liod replay`: a recorded drive (LiDAR pcap + IMU CSV log) through the odometry, as fast as
-// the CPU allows, writing the trajectory for evaluation.
+// `liod replay`: a recorded drive (LiDAR pcap + IMU CSV log) through the same pipeline as
+// `liod run` (threads, rings, odometry, publisher), with file sources in place of the sockets.
+// As fast as possible (default) it is deterministic: the same poses on every run. `--pace`
+// replays at a multiple of the recorded pace (1 = as recorded) with live ordering.
 
 #include <iosfwd>
 #include <string>
@@ -16,6 +18,8 @@ struct ReplayOptions {
   std::string imu_rate_tum;        // optional: IMU-rate propagated poses
   std::string scan_log_csv;        // optional: per-scan status, features, timings
   bool progress = false;           // a progress bar on stderr
+  double pace = 0.0;               // 0 = as fast as possible; 1 = recorded pace
+  std::string pose_socket;         // optional: also serve poses on this Unix socket
 };
 
 /// Returns the process exit code; prints a summary to `out`.

@@ -5,6 +5,8 @@
 #include <memory>
 #include <string>
 
+#include <Eigen/Geometry>
+
 #include "liod/imu_preintegration.hpp"
 
 namespace liod {
@@ -14,6 +16,8 @@ class TrajectoryWriter {
   /// Throws std::runtime_error if the file cannot be created.
   explicit TrajectoryWriter(const std::string& path);
   void write(const NavState& state);
+  void write(double time, const Eigen::Vector3d& position, const Eigen::Quaterniond& orientation);
+  void flush();
 
  private:
   struct Closer {

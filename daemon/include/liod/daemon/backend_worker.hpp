@@ -1,0 +1,49 @@
+#pragma once
+// The backend thread's work (issue 5): the pure liod::Backend plus what a live daemon needs
+// around it — persistence of keyframes/graph/map into output.state_dir (if backend.persist),
+// a log line per loop, and the latest correction T_world_odom published for other threads.
+// The Pipeline's backend thread calls process() for each keyframe and finish() at the end; the
+// odometry never waits for it (the keyframe ring is lossy live), and no lock is held across an
+// optimisation: the correction is copied under a mutex only after a solve finished.
+
+#include <Eigen/Geometry>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "liod/backend/backend.hpp"
+#include "liod/config.hpp"
+
+namespace liod {
+
+class StateWriter;
+
+class BackendWorker {
+ public:
+  explicit BackendWorker(const Config& config);
+  ~BackendWorker();
+  BackendWorker(const BackendWorker&) = delete;
+  BackendWorker& operator=(const BackendWorker&) = delete;
+
+  /// One keyframe, on the backend thread. Returns true when it closed a loop.
+  bool process(const Keyframe& keyframe);
+  /// End of the stream: the final state and the global map (map.pcd) when persisting.
+  void finish();
+
+  /// Latest T_world_odom (identity until a loop closes); any thread.
+  Eigen::Isometry3d correction() const;
+  /// The algorithm's state; read it only when the backend thread is not running (after join).
+  const Backend& backend() const { return backend_; }
+  /// Loops found/rejected and solve times, for the replay summary.
+  std::string summary() const;
+
+ private:
+  Config config_;
+  Backend backend_;
+  std::unique_ptr<StateWriter> writer_;
+  mutable std::mutex correction_mutex_;
+  Eigen::Isometry3d correction_ = Eigen::Isometry3d::Identity();
+};
+
+}  // namespace liod

@@ -1,0 +1,31 @@
+#pragma once
+// `liod run` (the live daemon), `liod record` (the same, plus a capture of what the drivers
+// receive) and `liod pose` (a pose socket client that prints).
+
+#include <iosfwd>
+#include <string>
+
+#include "liod/config.hpp"
+
+namespace liod {
+
+struct RunOptions {
+  std::string record_dir;  ///< non-empty: write lidar.pcap + imu.csv here (liod record)
+  double max_seconds = 0;  ///< > 0: stop after this long (tests, benchmarks)
+};
+
+/// Runs until SIGTERM/SIGINT (then drains, flushes and returns 0) or a fatal thread error (1).
+/// Talks to systemd (READY, STATUS, WATCHDOG, STOPPING) when started by it.
+int run_daemon(const Config& config, const RunOptions& options);
+
+struct PoseCommandOptions {
+  std::string socket;
+  bool json = false;         ///< ask the server for JSON lines and print them as they come
+  bool scan_only = false;
+  bool health = false;       ///< also print health messages
+  long count = 0;            ///< stop after this many poses (0 = until the daemon goes away)
+  double timeout_s = 5.0;    ///< give up after this long without a message
+};
+int run_pose_client(const PoseCommandOptions& options, std::ostream& out);
+
+}  // namespace liod

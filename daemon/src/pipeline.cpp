@@ -1,0 +1,592 @@
+#include "liod/daemon/pipeline.hpp"
+
+#include <pthread.h>
+#include <sched.h>
+#include <spdlog/spdlog.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <sstream>
+
+#include "liod/daemon/pose_server.hpp"
+#include "liod/drivers/byte_order.hpp"
+
+namespace liod {
+namespace {
+
+drivers::HeliosOptions helios_options(const Config& config) {
+  drivers::HeliosOptions o;
+  o.model = config.lidar.model == LidarModel::kHelios16P ? drivers::HeliosModel::Helios16P : drivers::HeliosModel::Helios5515;
+  if (!config.lidar.angles_csv.empty()) o.angles = drivers::load_angles_csv(config.lidar.angles_csv);
+  o.msop.min_range_m = static_cast<float>(config.lidar.min_range_m);
+  o.msop.max_range_m = static_cast<float>(config.lidar.max_range_m);
+  o.split_azimuth_deg = config.lidar.split_azimuth_deg;
+  return o;
+}
+
+std::uint32_t status_flags(std::uint32_t odometry_status) {
+  std::uint32_t f = 0;
+  if (odometry_status & kStatusInitializing) f |= pose::kInitializing;
+  if (odometry_status & kStatusDegenerate) f |= pose::kDegenerate;
+  if (odometry_status & kStatusImuGap) f |= pose::kImuLost;
+  if (odometry_status & kStatusKeyframe) f |= pose::kKeyframe;
+  if (odometry_status & kStatusFewFeatures) f |= pose::kFewFeatures;
+  return f;
+}
+
+std::uint32_t with_ok(std::uint32_t f) {
+  constexpr std::uint32_t kBad = pose::kInitializing | pose::kDegenerate | pose::kImuLost | pose::kLidarLost;
+  return (f & kBad) == 0 ? f | pose::kOk : f;
+}
+
+void fill_state(pose::PoseMessage& m, const NavState& s) {
+  m.time = s.time;
+  m.position = s.position;
+  m.orientation = Eigen::Quaterniond(s.rotation);  // as the TUM writer always did: bit-identical files
+  m.velocity = s.velocity;
+}
+
+}  // namespace
+
+std::int64_t steady_ns() noexcept {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// ---- LatencyStats ----------------------------------------------------------------------------
+void LatencyStats::add(double us) {
+  constexpr std::size_t kWindow = 4096;  // the most recent samples: a rolling figure for health
+  std::lock_guard lock(mutex_);
+  if (window_.size() < kWindow) {
+    window_.push_back(us);
+  } else {
+    window_[next_] = us;
+    next_ = (next_ + 1) % kWindow;
+  }
+  max_ = std::max(max_, us);
+}
+
+LatencyStats::Summary LatencyStats::summary() const {
+  std::vector<double> v;
+  Summary s;
+  {
+    std::lock_guard lock(mutex_);
+    v = window_;
+    s.max_us = max_;
+  }
+  s.count = v.size();
+  if (v.empty()) return s;
+  std::sort(v.begin(), v.end());
+  s.median_us = v[v.size() / 2];
+  s.p99_us = v[std::min(v.size() - 1, static_cast<std::size_t>(std::ceil(0.99 * static_cast<double>(v.size()))) - 1)];
+  return s;
+}
+
+// ---- LidarOutput -------------------------------------------------------------------------------
+LidarOutput::LidarOutput(const Config& config, drivers::SpscRing<ScanItem>& ring, bool lossless,
+                         const std::atomic<bool>& stop)
+    : config_(config), ring_(ring), lossless_(lossless), stop_(stop),
+      offset_(static_cast<std::int64_t>(config.time.offset_window_s * 1e9),
+              static_cast<std::int64_t>(config.time.jump_threshold_s * 1e9)) {
+  decoder_ = std::make_unique<drivers::RsHeliosDecoder>(helios_options(config),
+                                                        [this](Scan& scan, const drivers::SweepInfo&) { on_sweep(scan); });
+  heartbeat();
+}
+
+void LidarOutput::packet(std::span<const std::uint8_t> payload, std::int64_t arrival_ns, std::uint16_t dst_port) {
+  packet_steady_ = steady_ns();
+  heartbeat_.store(packet_steady_, std::memory_order_relaxed);
+  packets_.fetch_add(1, std::memory_order_relaxed);
+  if (tap) tap(payload, arrival_ns, dst_port);
+  // MSOP header time (spec §3: 6-byte BE seconds + 4-byte BE µs at offset 20) against arrival.
+  if (payload.size() == 1248 && payload[0] == 0x55 && payload[1] == 0xAA && payload[2] == 0x05 && payload[3] == 0x5A) {
+    const std::uint64_t sec = drivers::load_be48(&payload[20]);
+    const std::uint32_t usec = drivers::load_be32(&payload[26]);
+    if (usec < 1000000 && sec < 4000000000ULL) {
+      offset_.add(arrival_ns, static_cast<std::int64_t>(sec) * 1000000000 + static_cast<std::int64_t>(usec) * 1000);
+      jumps_.store(offset_.jumps(), std::memory_order_relaxed);
+    }
+  }
+  decoder_->feed(payload, arrival_ns);
+  const auto s = decoder_->stats();
+  lost_.store(s.lost_packets, std::memory_order_relaxed);
+  std::lock_guard lock(stats_mutex_);
+  stats_copy_ = s;
+}
+
+void LidarOutput::on_sweep(Scan& scan) {
+  const auto& difop = decoder_->last_difop();
+  const bool synced = difop.has_value() && difop->time_sync_status != 0;
+  synced_.store(synced, std::memory_order_relaxed);
+  std::int64_t offset = 0;
+  switch (config_.time.lidar_clock) {
+    case LidarClock::kSensor:
+      break;
+    case LidarClock::kHost:
+      offset = offset_.offset_ns();
+      break;
+    case LidarClock::kAuto: {
+      // The sensor's time when it says it is synced; before its first DIFOP, when it agrees with
+      // the host anyway (both synced, or a recording whose capture times are the header times).
+      const bool agrees = std::llabs(offset_.offset_ns()) < static_cast<std::int64_t>(config_.time.jump_threshold_s * 1e9);
+      const bool use_sensor = difop.has_value() ? synced : agrees;
+      offset = use_sensor ? 0 : offset_.offset_ns();
+      break;
+    }
+  }
+  offset_used_.store(offset, std::memory_order_relaxed);
+  if (offset != 0) {
+    const double o = static_cast<double>(offset) * 1e-9;
+    scan.start_time += o;
+    scan.end_time += o;
+  }
+  using std::swap;
+  swap(item_.scan, scan);
+  item_.ready_steady_ns = packet_steady_;
+  sweeps_.fetch_add(1, std::memory_order_relaxed);
+  last_sweep_.store(packet_steady_, std::memory_order_relaxed);
+  // Exchange with the ring: item_ comes back with a recycled buffer, handed back to the decoder.
+  if (lossless_) ring_.push_wait(item_, stop_);
+  else ring_.try_push(item_);
+  swap(item_.scan, scan);
+}
+
+void LidarOutput::finish() {
+  decoder_->flush();
+  {
+    std::lock_guard lock(stats_mutex_);
+    stats_copy_ = decoder_->stats();
+  }
+  ring_.close();
+}
+
+drivers::HeliosStats LidarOutput::decoder_stats() const {
+  std::lock_guard lock(stats_mutex_);
+  return stats_copy_;
+}
+
+// ---- ImuOutput ---------------------------------------------------------------------------------
+void ImuOutput::sample(const ImuSample& s) {
+  const std::int64_t now = steady_ns();
+  heartbeat_.store(now, std::memory_order_relaxed);
+  if (tap) tap(s);
+  item_.sample = s;
+  item_.arrival_steady_ns = now;
+  if (lossless_) ring_.push_wait(item_, stop_);
+  else ring_.try_push(item_);
+  samples_.fetch_add(1, std::memory_order_relaxed);
+  last_.store(now, std::memory_order_relaxed);
+}
+
+// ---- Pipeline ----------------------------------------------------------------------------------
+Pipeline::Pipeline(const Config& config, PipelineOptions options)
+    : config_(config), options_(std::move(options)),
+      scan_ring_(static_cast<std::size_t>(config.threads.scan_ring), &odometry_wakeup_),
+      imu_ring_(static_cast<std::size_t>(config.threads.imu_ring), &odometry_wakeup_),
+      pose_ring_(static_cast<std::size_t>(config.threads.pose_ring), &publisher_wakeup_),
+      keyframe_ring_(static_cast<std::size_t>(config.threads.keyframe_ring), &backend_wakeup_) {
+  const bool lossless = options_.ordering == Ordering::Lockstep;
+  lidar_out_ = std::make_unique<LidarOutput>(config_, scan_ring_, lossless, source_stop_);
+  imu_out_ = std::make_unique<ImuOutput>(imu_ring_, lossless, source_stop_);
+  if (config_.backend.enabled) backend_ = std::make_unique<BackendWorker>(config_);
+}
+
+Pipeline::~Pipeline() {
+  request_stop();
+  stop_.store(true);
+  for (auto& t : threads_) {
+    if (t.joinable()) t.join();
+  }
+}
+
+void Pipeline::add_sink(std::function<void(const PoseEvent&)> sink) { sinks_.push_back(std::move(sink)); }
+
+void Pipeline::fail(const std::string& what) {
+  spdlog::error("{}", what);
+  {
+    std::lock_guard lock(error_mutex_);
+    if (error_.empty()) error_ = what;
+  }
+  request_stop();
+}
+
+std::string Pipeline::error() const {
+  std::lock_guard lock(error_mutex_);
+  return error_;
+}
+
+void Pipeline::apply_thread_config(const ThreadConfig& tc, const char* name) {
+  ::pthread_setname_np(::pthread_self(), name);
+  if (!options_.realtime_threads) return;
+  if (tc.cpu >= 0) {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(tc.cpu, &set);
+    if (::pthread_setaffinity_np(::pthread_self(), sizeof set, &set) != 0) {
+      spdlog::warn("{}: cannot pin to CPU {} (not present or not allowed); running unpinned", name, tc.cpu);
+    }
+  }
+  if (tc.priority > 0) {
+    sched_param p{};
+    p.sched_priority = tc.priority;
+    if (::pthread_setschedparam(::pthread_self(), SCHED_FIFO, &p) != 0) {
+      spdlog::warn("{}: SCHED_FIFO priority {} not permitted (needs CAP_SYS_NICE or an RLIMIT_RTPRIO); normal scheduling",
+                   name, tc.priority);
+    }
+  }
+}
+
+void Pipeline::start(std::unique_ptr<LidarSource> lidar, std::unique_ptr<ImuSource> imu) {
+  lidar_source_ = std::move(lidar);
+  imu_source_ = std::move(imu);
+  std::unique_ptr<PoseServer> server;
+  if (!options_.pose_socket.empty()) server = std::make_unique<PoseServer>(options_.pose_socket, config_.pose_socket);
+  const auto now = steady_ns();
+  hb_odometry_ = hb_publisher_ = hb_backend_ = now;
+  auto wrap = [this](const char* name, auto body) {
+    return [this, name, body]() mutable {
+      try {
+        body();
+      } catch (const std::exception& e) {
+        fail(std::string(name) + ": " + e.what());
+      }
+      finished_threads_.fetch_add(1);
+    };
+  };
+  thread_count_ = 5;
+  threads_.emplace_back(wrap("lidar", [this] { lidar_thread(*lidar_source_); }));
+  threads_.emplace_back(wrap("imu", [this] { imu_thread(imu_source_.get()); }));
+  threads_.emplace_back(wrap("odometry", [this] { odometry_thread(); }));
+  threads_.emplace_back(wrap("publisher", [this, s = std::shared_ptr<PoseServer>(std::move(server))] { publisher_thread(s.get()); }));
+  threads_.emplace_back(wrap("backend", [this] { backend_thread(); }));
+}
+
+void Pipeline::join() {
+  for (auto& t : threads_) {
+    if (t.joinable()) t.join();
+  }
+}
+
+bool Pipeline::drain(std::chrono::milliseconds limit) {
+  request_stop();
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  while (!finished() && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  const bool clean = finished();
+  stop_.store(true);  // whatever is still running now exits at its next bounded wait
+  join();
+  return clean;
+}
+
+void Pipeline::lidar_thread(LidarSource& source) {
+  apply_thread_config(config_.threads.lidar, "liod-lidar");
+  try {
+    source.run(*lidar_out_, source_stop_);
+  } catch (...) {
+    lidar_out_->finish();
+    throw;
+  }
+  lidar_out_->finish();
+}
+
+void Pipeline::imu_thread(ImuSource* source) {
+  apply_thread_config(config_.threads.imu, "liod-imu");
+  if (source != nullptr) {
+    try {
+      source->run(*imu_out_, source_stop_);
+    } catch (...) {
+      imu_out_->finish();
+      throw;
+    }
+  }
+  imu_out_->finish();
+}
+
+void Pipeline::push_pose(PoseEvent& ev) {
+  if (options_.ordering == Ordering::Lockstep) pose_ring_.push_wait(ev, stop_);
+  else pose_ring_.try_push(ev);
+}
+
+void Pipeline::odometry_thread() {
+  apply_thread_config(config_.threads.odometry, "liod-odometry");
+  LidarInertialOdometry odometry(config_);
+  const bool lockstep = options_.ordering == Ordering::Lockstep;
+  const bool imu_poses = options_.imu_rate_poses;
+  const double lidar_lost_s = config_.drivers.lidar.lost_after_s;
+  const auto imu_wait_ns = static_cast<std::int64_t>(config_.time.imu_wait_s * 1e9);
+  const auto imu_lost_ns = static_cast<std::int64_t>(config_.drivers.imu.lost_after_s * 1e9);
+  const auto lidar_lost_ns = static_cast<std::int64_t>(lidar_lost_s * 1e9);
+  const bool have_imu_source = imu_source_ != nullptr;
+  std::deque<ScanItem> pending;
+  ScanItem spare;
+  ImuItem held;
+  bool have_held = false;
+  Eigen::Vector3d last_gyro = Eigen::Vector3d::Zero();
+  double last_scan_end = -std::numeric_limits<double>::infinity();
+  std::uint32_t last_scan_flags = pose::kInitializing;
+  StateCovariance last_covariance = StateCovariance::Zero();
+
+  // Host-time health flags only in live ordering: replay must not depend on thread timing.
+  auto live_flags = [&]() -> std::uint32_t {
+    if (lockstep) return 0;
+    const std::int64_t now = steady_ns();
+    std::uint32_t f = 0;
+    if (have_imu_source && now - imu_out_->last_sample_steady_ns() > imu_lost_ns) f |= pose::kImuLost;
+    if (now - lidar_out_->last_sweep_steady_ns() > lidar_lost_ns) f |= pose::kLidarLost;
+    return f;
+  };
+
+  auto feed = [&](const ImuItem& item) {
+    odometry.add_imu(item.sample);
+    ++totals_.imu_fed;
+    last_gyro = item.sample.gyro;
+    if (!imu_poses) return;
+    const auto state = odometry.propagated_state();
+    if (!state) return;
+    PoseEvent ev;
+    ev.message.type = pose::MessageType::ImuPose;
+    fill_state(ev.message, *state);
+    ev.message.angular_rate = item.sample.gyro - state->gyro_bias;
+    ev.message.covariance = pose::pose_covariance_from_state(last_covariance);  // of the last scan update
+    std::uint32_t f = last_scan_flags & (pose::kDegenerate | pose::kFewFeatures);
+    if (std::isfinite(last_scan_end) && state->time - last_scan_end > lidar_lost_s) f |= pose::kLidarLost;
+    ev.message.flags = with_ok(f | live_flags());
+    ev.input_steady_ns = item.arrival_steady_ns;
+    push_pose(ev);
+  };
+
+  auto process = [&](ScanItem& item) {
+    hb_odometry_.store(steady_ns(), std::memory_order_relaxed);
+    const auto result = odometry.process(item.scan);
+    ++totals_.scans;
+    if (!result) return;
+    ++totals_.processed;
+    scans_processed_.fetch_add(1, std::memory_order_relaxed);
+    const double ms = result->deskew_ms + result->features_ms + result->registration_ms;
+    totals_.front_end_ms.push_back(ms);
+    last_process_ms_.store(ms + result->map_ms, std::memory_order_relaxed);
+    if (result->status & kStatusDegenerate) ++totals_.degenerate;
+    if (result->status & kStatusKeyframe) ++totals_.keyframes;
+    PoseEvent ev;
+    ev.message.type = pose::MessageType::ScanPose;
+    fill_state(ev.message, result->state);
+    ev.message.angular_rate = last_gyro - result->state.gyro_bias;
+    ev.message.covariance = pose::pose_covariance_from_state(result->covariance);
+    last_covariance = result->covariance;
+    last_scan_flags = status_flags(result->status);
+    std::uint32_t f = last_scan_flags | live_flags();
+    f &= ~static_cast<std::uint32_t>(pose::kLidarLost);  // this pose comes from a scan
+    ev.message.flags = with_ok(f);
+    auto& d = ev.diagnostics;
+    d.status = result->status;
+    d.points = result->points;
+    d.edges = result->edge_features;
+    d.planes = result->plane_features;
+    d.residuals = result->residuals;
+    d.iterations = result->iterations;
+    d.rms_m = result->rms_residual_m;
+    d.min_eigenvalue = result->min_translation_eigenvalue;
+    d.hausdorff_m = result->hausdorff_m;
+    d.deskew_ms = result->deskew_ms;
+    d.features_ms = result->features_ms;
+    d.registration_ms = result->registration_ms;
+    d.map_ms = result->map_ms;
+    ev.input_steady_ns = item.ready_steady_ns;
+    last_scan_end = result->state.time;
+    push_pose(ev);
+    if ((result->status & kStatusKeyframe) && !odometry.keyframes().empty()) {
+      KeyframeEvent k{std::make_shared<const Keyframe>(odometry.keyframes().back()), result->covariance};
+      if (lockstep) keyframe_ring_.push_wait(k, stop_);
+      else keyframe_ring_.try_push(k);
+    }
+  };
+  auto retire_front = [&]() {
+    spare = std::move(pending.front());
+    pending.pop_front();
+  };
+
+  const std::size_t max_pending = scan_ring_.capacity();
+  while (!stop_.load(std::memory_order_relaxed)) {
+    hb_odometry_.store(steady_ns(), std::memory_order_relaxed);
+    bool progress = false;
+    if (lockstep) {
+      if (pending.empty() && scan_ring_.try_pop(spare)) {
+        pending.push_back(std::move(spare));
+        progress = true;
+      }
+      if (!pending.empty()) {
+        const double end = odometry.scan_end_time(pending.front().scan);
+        for (;;) {
+          if (!have_held) have_held = imu_ring_.try_pop(held);
+          if (!have_held || held.sample.time > end + 0.02) break;
+          feed(held);
+          have_held = false;
+          progress = true;
+        }
+        const bool imu_ended = !have_held && imu_ring_.drained();
+        if (odometry.latest_imu_time() >= end || imu_ended) {
+          process(pending.front());
+          retire_front();
+          progress = true;
+        }
+      } else if (scan_ring_.drained()) {
+        break;  // like the single-threaded replay, IMU samples after the last scan are not used
+      }
+    } else {
+      while (pending.size() < max_pending && scan_ring_.try_pop(spare)) {
+        pending.push_back(std::move(spare));
+        progress = true;
+      }
+      auto process_ready = [&]() {
+        while (!pending.empty()) {
+          const double end = odometry.scan_end_time(pending.front().scan);
+          const bool imu_there = odometry.latest_imu_time() >= end;
+          const bool waited = steady_ns() - pending.front().ready_steady_ns > imu_wait_ns;
+          if (!imu_there && !waited && !imu_ring_.drained()) break;
+          process(pending.front());
+          retire_front();
+          progress = true;
+        }
+      };
+      process_ready();
+      while (imu_ring_.try_pop(held)) {
+        feed(held);
+        progress = true;
+        process_ready();
+      }
+      if (pending.empty() && scan_ring_.drained() && imu_ring_.drained()) break;
+    }
+    if (!progress) odometry_wakeup_.wait(std::chrono::milliseconds(lockstep ? 1 : 5));
+  }
+  totals_.imu_dropped = odometry.dropped_imu_samples();
+  pose_ring_.close();
+  keyframe_ring_.close();
+}
+
+void Pipeline::publisher_thread(PoseServer* server) {
+  apply_thread_config(config_.threads.publisher, "liod-publisher");
+  std::vector<pollfd> fds;
+  PoseEvent ev;
+  const auto health_period = std::chrono::duration<double>(config_.pose_socket.health_interval_s);
+  auto next_health = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(health_period);
+  auto next_housekeeping = std::chrono::steady_clock::now();
+  HealthRates rates;
+  while (!stop_.load(std::memory_order_relaxed)) {
+    hb_publisher_.store(steady_ns(), std::memory_order_relaxed);
+    fds.clear();
+    fds.push_back({publisher_wakeup_.fd(), POLLIN, 0});
+    if (server != nullptr) server->fill_pollfds(fds);
+    ::poll(fds.data(), fds.size(), 50);
+    if ((fds[0].revents & POLLIN) != 0) publisher_wakeup_.clear();
+    if (server != nullptr) server->handle(fds, 1);
+    while (pose_ring_.try_pop(ev)) {
+      for (const auto& sink : sinks_) sink(ev);
+      const bool scan = ev.message.type == pose::MessageType::ScanPose;
+      if (server != nullptr) server->broadcast(ev.message);
+      if (ev.input_steady_ns > 0) {
+        (scan ? scan_latency_ : imu_latency_).add(static_cast<double>(steady_ns() - ev.input_steady_ns) * 1e-3);
+      }
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (server != nullptr && now >= next_housekeeping) {
+      server->housekeeping();
+      next_housekeeping = now + std::chrono::milliseconds(100);
+      const auto& s = server->stats();
+      socket_clients_.store(s.clients, std::memory_order_relaxed);
+      socket_skipped_.store(s.skipped_messages, std::memory_order_relaxed);
+      socket_dropped_.store(s.dropped_stuck, std::memory_order_relaxed);
+    }
+    if (server != nullptr && now >= next_health) {
+      server->broadcast_health(health_json(rates));
+      next_health = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(health_period);
+    }
+    if (pose_ring_.drained()) break;
+  }
+}
+
+void Pipeline::backend_thread() {
+  ::pthread_setname_np(::pthread_self(), "liod-backend");
+  if (options_.realtime_threads) {
+    // Low priority: below the drivers and the odometry, which may preempt it at any time.
+    ::setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), config_.threads.backend_nice);
+  }
+  KeyframeEvent k;
+  while (!stop_.load(std::memory_order_relaxed)) {
+    hb_backend_.store(steady_ns(), std::memory_order_relaxed);
+    bool any = false;
+    while (keyframe_ring_.try_pop(k)) {
+      // Keyframes in ring order: the same sequence on every lockstep replay (deterministic).
+      if (backend_) backend_->process(*k.keyframe);
+      backend_keyframes_.fetch_add(1, std::memory_order_relaxed);
+      k.keyframe.reset();
+      any = true;
+    }
+    if (keyframe_ring_.drained()) break;
+    if (!any) backend_wakeup_.wait(std::chrono::milliseconds(100));
+  }
+  if (backend_) backend_->finish();
+}
+
+std::vector<std::string> Pipeline::stalled(std::chrono::milliseconds max_age) const {
+  std::vector<std::string> out;
+  const std::int64_t now = steady_ns();
+  const std::int64_t limit = std::chrono::duration_cast<std::chrono::nanoseconds>(max_age).count();
+  auto check = [&](const char* name, std::int64_t hb) {
+    if (now - hb > limit) out.emplace_back(name);
+  };
+  check("lidar", lidar_out_->heartbeat_ns());
+  if (imu_source_) check("imu", imu_out_->heartbeat_ns());
+  check("odometry", hb_odometry_.load());
+  check("publisher", hb_publisher_.load());
+  check("backend", hb_backend_.load());
+  if (!error().empty()) out.emplace_back("error: " + error());
+  return out;
+}
+
+std::string Pipeline::health_json(HealthRates& rates) const {
+  const double now = static_cast<double>(steady_ns()) * 1e-9;
+  const auto hs = lidar_out_->decoder_stats();
+  const double dt = rates.time > 0 ? now - rates.time : 0.0;
+  const std::uint64_t packets = lidar_out_->packets();
+  const std::uint64_t imu = imu_out_->samples();
+  const std::uint64_t scans = scans_processed_.load();
+  auto rate = [&](std::uint64_t n, std::uint64_t prev) { return dt > 0 ? static_cast<double>(n - prev) / dt : 0.0; };
+  std::ostringstream j;
+  j.setf(std::ios::fixed);
+  j.precision(3);
+  auto ring = [&](const char* name, auto& r) {
+    j << '"' << name << "\":{\"fill\":" << r.size() << ",\"capacity\":" << r.capacity() << ",\"drops\":" << r.drops() << '}';
+  };
+  const auto sl = scan_latency_.summary();
+  const auto il = imu_latency_.summary();
+  j << "{\"version\":1,\"lidar\":{\"packets\":" << packets << ",\"packet_rate_hz\":" << rate(packets, rates.packets)
+    << ",\"sweeps\":" << lidar_out_->sweeps() << ",\"lost_packets\":" << hs.lost_packets << ",\"rejected_packets\":"
+    << hs.rejected() << ",\"clock_offset_s\":" << static_cast<double>(lidar_out_->clock_offset_ns()) * 1e-9
+    << ",\"sensor_synced\":" << (lidar_out_->sensor_synced() ? "true" : "false") << ",\"clock_jumps\":"
+    << lidar_out_->clock_jumps() << "},\"imu\":{\"samples\":" << imu << ",\"rate_hz\":" << rate(imu, rates.imu)
+    << ",\"pps_correction_s\":" << static_cast<double>(imu_out_->pps_correction_ns.load()) * 1e-9
+    << "},\"odometry\":{\"scans\":" << scans << ",\"scan_rate_hz\":" << rate(scans, rates.scans)
+    << ",\"last_process_ms\":" << last_process_ms_.load() << "},\"rings\":{";
+  ring("scan", scan_ring_);
+  j << ',';
+  ring("imu", imu_ring_);
+  j << ',';
+  ring("pose", pose_ring_);
+  j << ',';
+  ring("keyframe", keyframe_ring_);
+  j << "},\"latency_us\":{\"scan_to_socket\":{\"median\":" << sl.median_us << ",\"p99\":" << sl.p99_us
+    << ",\"max\":" << sl.max_us << "},\"imu_to_socket\":{\"median\":" << il.median_us << ",\"p99\":" << il.p99_us
+    << ",\"max\":" << il.max_us << "}},\"socket\":{\"clients\":" << socket_clients_.load() << ",\"skipped_messages\":"
+    << socket_skipped_.load() << ",\"dropped_clients\":" << socket_dropped_.load()
+    << "},\"backend\":{\"keyframes\":" << backend_keyframes_.load() << "}}";
+  rates.time = now;
+  rates.packets = packets;
+  rates.imu = imu;
+  rates.scans = scans;
+  return j.str();
+}
+
+}  // namespace liod

@@ -1,0 +1,281 @@
+#include "liod/daemon/run_command.hpp"
+
+#include <poll.h>
+#include <signal.h>
+#include <spdlog/spdlog.h>
+#include <sys/signalfd.h>
+#include <systemd/sd-daemon.h>
+#include <unistd.h>
+
+#include <array>
+#include <cinttypes>
+#include <cstdio>
+#include <filesystem>
+#include <ostream>
+#include <thread>
+
+#include "liod/daemon/pipeline.hpp"
+#include "liod/daemon/pose_client.hpp"
+#include "liod/daemon/sources.hpp"
+#include "liod/drivers/imu_csv.hpp"
+#include "liod/drivers/pcap_writer.hpp"
+#include "liod/drivers/time_sync.hpp"
+
+namespace liod {
+namespace {
+
+/// Writes what the drivers receive, off their threads: the taps only copy into SPSC rings (a
+/// full ring drops and counts, never stalls a driver), and this thread does the file I/O.
+class Recorder {
+ public:
+  explicit Recorder(const std::filesystem::path& dir)
+      : pcap_(dir / "lidar.pcap"), imu_(dir / "imu.csv"), packets_(8192, &wakeup_), samples_(8192, &wakeup_),
+        thread_([this] { run(); }) {}
+  ~Recorder() {
+    stop_.store(true);
+    wakeup_.notify();
+    thread_.join();
+    pcap_.flush();
+    imu_.flush();
+    spdlog::info("record: {} packets, {} IMU samples written; {} packets and {} samples dropped (disk too slow)",
+                 packets_written_, samples_written_, packets_.drops(), samples_.drops());
+  }
+  void packet(std::span<const std::uint8_t> payload, std::int64_t time_ns, std::uint16_t dst_port) {
+    if (payload.size() > kMaxPayload) return;
+    item_.time_ns = time_ns;
+    item_.dst_port = dst_port;
+    item_.length = static_cast<std::uint16_t>(payload.size());
+    std::copy(payload.begin(), payload.end(), item_.data.begin());
+    packets_.try_push(item_);
+  }
+  void sample(const ImuSample& s) {
+    ImuSample copy = s;
+    samples_.try_push(copy);
+  }
+
+ private:
+  static constexpr std::size_t kMaxPayload = 1500;
+  struct Packet {
+    std::int64_t time_ns = 0;
+    std::uint16_t dst_port = 0;
+    std::uint16_t length = 0;
+    std::array<std::uint8_t, kMaxPayload> data{};
+  };
+  void run() {
+    Packet p;
+    ImuSample s;
+    for (;;) {
+      bool any = false;
+      while (packets_.try_pop(p)) {
+        drivers::UdpDatagram d;
+        d.capture_time_ns = p.time_ns;
+        d.src_ip = 0xC0A801C8;  // 192.168.1.200, the sensor's factory address (the source is not kept)
+        d.dst_ip = 0xC0A80166;  // 192.168.1.102
+        d.src_port = p.dst_port;
+        d.dst_port = p.dst_port;
+        d.payload = std::span<const std::uint8_t>(p.data.data(), p.length);
+        pcap_.write(d);
+        ++packets_written_;
+        any = true;
+      }
+      while (samples_.try_pop(s)) {
+        imu_.write(s);
+        ++samples_written_;
+        any = true;
+      }
+      if (!any) {
+        if (stop_.load()) return;
+        wakeup_.wait(std::chrono::milliseconds(100));
+      }
+    }
+  }
+  drivers::PcapWriter pcap_;
+  drivers::ImuCsvWriter imu_;
+  drivers::Notifier wakeup_;
+  drivers::SpscRing<Packet> packets_;
+  drivers::SpscRing<ImuSample> samples_;
+  Packet item_;
+  std::atomic<bool> stop_{false};
+  std::uint64_t packets_written_ = 0, samples_written_ = 0;
+  std::thread thread_;
+};
+
+/// SIGTERM/SIGINT/SIGHUP arrive on a descriptor instead of an asynchronous handler: no global
+/// flag, and the main loop's poll() wakes at once. Blocked before any thread starts, so every
+/// thread inherits the mask and only this descriptor sees them.
+class SignalFd {
+ public:
+  SignalFd() {
+    sigemptyset(&set_);
+    sigaddset(&set_, SIGTERM);
+    sigaddset(&set_, SIGINT);
+    sigaddset(&set_, SIGHUP);
+    ::pthread_sigmask(SIG_BLOCK, &set_, &old_);
+    fd_ = ::signalfd(-1, &set_, SFD_NONBLOCK | SFD_CLOEXEC);
+    if (fd_ < 0) throw std::runtime_error("signalfd failed");
+  }
+  ~SignalFd() {
+    ::close(fd_);
+    ::pthread_sigmask(SIG_SETMASK, &old_, nullptr);
+  }
+  int fd() const { return fd_; }
+  /// The signal number waiting, or 0.
+  int take() const {
+    signalfd_siginfo info{};
+    return ::read(fd_, &info, sizeof info) == static_cast<ssize_t>(sizeof info) ? static_cast<int>(info.ssi_signo) : 0;
+  }
+
+ private:
+  sigset_t set_{};
+  sigset_t old_{};
+  int fd_ = -1;
+};
+
+}  // namespace
+
+int run_daemon(const Config& config, const RunOptions& options) {
+  SignalFd signals;
+  std::unique_ptr<Recorder> recorder;
+  if (!options.record_dir.empty()) {
+    std::filesystem::create_directories(options.record_dir);
+    recorder = std::make_unique<Recorder>(options.record_dir);
+  }
+  const auto socket_dir = std::filesystem::path(config.output.pose_socket).parent_path();
+  if (!socket_dir.empty() && !std::filesystem::is_directory(socket_dir)) {
+    throw std::runtime_error("pose socket directory " + socket_dir.string() +
+                             " does not exist (systemd's RuntimeDirectory= creates /run/liod)");
+  }
+  std::unique_ptr<drivers::PpsDiscipline> pps;
+  if (!config.time.pps_chip.empty()) {
+    try {
+      pps = std::make_unique<drivers::PpsDiscipline>(config.time.pps_chip, config.time.pps_line);
+    } catch (const std::exception& e) {
+      spdlog::warn("{}; IMU stamps stay on the host clock", e.what());
+    }
+  }
+  PipelineOptions po;
+  po.ordering = Ordering::Arrival;
+  po.imu_rate_poses = config.pose_socket.imu_rate;
+  po.pose_socket = config.output.pose_socket;
+  Pipeline pipeline(config, po);
+  if (recorder) {
+    Recorder* r = recorder.get();
+    pipeline.lidar_output().tap = [r](std::span<const std::uint8_t> p, std::int64_t t, std::uint16_t port) { r->packet(p, t, port); };
+    pipeline.imu_output().tap = [r](const ImuSample& s) { r->sample(s); };
+  }
+  auto lidar = make_live_lidar_source(config);
+  auto imu = make_live_imu_source(config);
+  spdlog::info("liod: LiDAR {}, IMU {}, poses on {}", lidar->describe(), imu ? imu->describe() : "none",
+               config.output.pose_socket);
+  pipeline.start(std::move(lidar), std::move(imu));
+  ::sd_notify(0, "READY=1\nSTATUS=running");
+
+  std::uint64_t watchdog_us = 0;
+  const bool watchdog = ::sd_watchdog_enabled(0, &watchdog_us) > 0 && watchdog_us > 0;
+  const auto ping_every = std::chrono::microseconds(watchdog ? watchdog_us / 2 : 1000000);
+  // A thread is stalled when it has not passed its loop for this long: every driver and worker
+  // loop waits at most 100 ms, and a scan takes tens of ms, so 2 s means stuck.
+  const auto stall_limit = std::chrono::milliseconds(2000);
+  drivers::ClockJumpDetector jumps(static_cast<std::int64_t>(config.time.jump_threshold_s * 1e9));
+  auto next_ping = std::chrono::steady_clock::now();
+  auto next_log = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                          std::chrono::duration<double>(config.pose_socket.health_log_interval_s));
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                               std::chrono::duration<double>(options.max_seconds));
+  HealthRates rates;
+  int exit_code = 0;
+  for (;;) {
+    pollfd p{signals.fd(), POLLIN, 0};
+    ::poll(&p, 1, 100);
+    if ((p.revents & POLLIN) != 0) {
+      const int sig = signals.take();
+      if (sig == SIGHUP) {
+        spdlog::info("SIGHUP: configuration reload is not supported; restart the service to apply changes");
+        continue;
+      }
+      spdlog::info("signal {}: stopping", sig);
+      break;
+    }
+    if (!pipeline.error().empty()) {
+      exit_code = 1;
+      break;
+    }
+    if (options.max_seconds > 0 && std::chrono::steady_clock::now() >= deadline) break;
+    if (pps) pipeline.imu_output().pps_correction_ns.store(pps->correction_ns());
+    if (const auto step = jumps.check(); step != 0) {
+      spdlog::warn("host clock jumped by {:.3f} s (CLOCK_REALTIME step); LiDAR offset tracking restarts on its own",
+                   static_cast<double>(step) * 1e-9);
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (now >= next_ping) {
+      next_ping = now + ping_every;
+      const auto stalled = pipeline.stalled(stall_limit);
+      if (stalled.empty()) {
+        if (watchdog) ::sd_notify(0, "WATCHDOG=1");
+      } else {
+        // No ping: systemd's watchdog restarts us if this persists for WatchdogSec.
+        std::string names;
+        for (const auto& s : stalled) names += (names.empty() ? "" : ", ") + s;
+        spdlog::error("threads not progressing: {}; withholding the watchdog ping", names);
+      }
+    }
+    if (config.pose_socket.health_log_interval_s > 0 && now >= next_log) {
+      next_log = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                           std::chrono::duration<double>(config.pose_socket.health_log_interval_s));
+      const std::string health = pipeline.health_json(rates);
+      spdlog::info("health {}", health);
+      const std::string status = "STATUS=sweeps " + std::to_string(pipeline.lidar_output().sweeps()) + ", IMU samples " +
+                                 std::to_string(pipeline.imu_output().samples());
+      ::sd_notify(0, status.c_str());
+    }
+  }
+  ::sd_notify(0, "STOPPING=1");
+  // Drain what the rings hold (bounded), then flush recordings: a stop loses no received data.
+  const bool clean = pipeline.drain(std::chrono::milliseconds(3000));
+  if (!clean) spdlog::warn("some threads did not drain within 3 s; stopped them");
+  recorder.reset();
+  if (!pipeline.error().empty()) exit_code = 1;
+  spdlog::info("liod stopped ({} scans with a pose, {} keyframes to the backend)", pipeline.totals().processed,
+               pipeline.keyframes_received());
+  return exit_code;
+}
+
+int run_pose_client(const PoseCommandOptions& o, std::ostream& out) {
+  PoseClient client(o.socket);
+  if (o.json) client.request("json");
+  if (o.scan_only) client.request("scan");
+  const auto timeout = std::chrono::milliseconds(static_cast<long>(o.timeout_s * 1000));
+  long poses = 0;
+  char line[512];
+  while (o.count == 0 || poses < o.count) {
+    if (o.json) {
+      std::string l;
+      if (!client.read_line(l, timeout)) break;
+      const bool is_health = l.rfind("{\"type\":\"health\"", 0) == 0;
+      if (is_health && !o.health) continue;
+      out << l << '\n' << std::flush;
+      if (!is_health) ++poses;
+      continue;
+    }
+    pose::Message m;
+    if (!client.read(m, timeout)) break;
+    if (m.type == pose::MessageType::Health) {
+      if (o.health) out << "health " << m.health << '\n' << std::flush;
+      continue;
+    }
+    const auto& p = m.pose;
+    std::snprintf(line, sizeof line,
+                  "%s %.6f p %.3f %.3f %.3f q %.5f %.5f %.5f %.5f v %.3f %.3f %.3f w %.4f %.4f %.4f sd_xyz %.3f %.3f %.3f %s\n",
+                  m.type == pose::MessageType::ScanPose ? "scan" : "imu ", p.time, p.position.x(), p.position.y(),
+                  p.position.z(), p.orientation.x(), p.orientation.y(), p.orientation.z(), p.orientation.w(),
+                  p.velocity.x(), p.velocity.y(), p.velocity.z(), p.angular_rate.x(), p.angular_rate.y(),
+                  p.angular_rate.z(), std::sqrt(std::max(0.0, p.covariance(0, 0))), std::sqrt(std::max(0.0, p.covariance(1, 1))),
+                  std::sqrt(std::max(0.0, p.covariance(2, 2))), pose::flag_names(p.flags).c_str());
+    out << line << std::flush;
+    ++poses;
+  }
+  if (!client.connected()) return poses > 0 ? 0 : 1;
+  return 0;
+}
+
+}  // namespace liod

@@ -1,0 +1,71 @@
+#pragma once
+// Xsens MTi "MTData2" binary output (Xbus protocol), as sent on the serial line:
+//
+//   PRE 0xFA | BID 0xFF | MID 0x36 | LEN (1 byte; 0xFF = extended: 2 more bytes, big-endian) |
+//   DATA: packets of [XDI 16-bit BE | size 8-bit | payload] | CS
+//
+// The message is valid when every byte after the preamble, checksum included, sums to 0 mod 256.
+// All values are big-endian; the items used here (XDI low nibble 0x0 = float32):
+//   0x1020 PacketCounter (u16), 0x1060 SampleTimeFine (u32, 10 kHz ticks),
+//   0x8020 RateOfTurn (3 x f32, rad/s), 0x4020 Acceleration (3 x f32, m/s^2, specific force),
+//   0x4030 FreeAcceleration (3 x f32, gravity removed: not usable as an IMU input, ignored).
+// Unknown items are skipped by their size. The parser is fed raw bytes in any chunking and
+// resynchronises on the next preamble after garbage, a bad checksum or a truncated message.
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace liod::drivers::xsens {
+
+inline constexpr std::uint8_t kPreamble = 0xFA;
+inline constexpr std::uint8_t kBusId = 0xFF;
+inline constexpr std::uint8_t kMidMtData2 = 0x36;
+inline constexpr std::uint16_t kPacketCounter = 0x1020;
+inline constexpr std::uint16_t kSampleTimeFine = 0x1060;
+inline constexpr std::uint16_t kRateOfTurn = 0x8020;
+inline constexpr std::uint16_t kAcceleration = 0x4020;
+inline constexpr std::uint16_t kFreeAcceleration = 0x4030;
+
+struct MtData2Sample {
+  std::optional<std::uint16_t> packet_counter;
+  std::optional<std::uint32_t> sample_time_fine;  ///< 10 kHz ticks
+  std::optional<Eigen::Vector3d> rate_of_turn;    ///< rad/s
+  std::optional<Eigen::Vector3d> acceleration;    ///< m/s^2 (specific force)
+};
+
+struct MtParserStats {
+  std::uint64_t messages = 0;          ///< valid MTData2 messages
+  std::uint64_t other_messages = 0;    ///< valid Xbus messages with another MID (acks, errors)
+  std::uint64_t bad_checksum = 0;
+  std::uint64_t malformed = 0;         ///< checksum fine but item sizes do not add up
+  std::uint64_t skipped_bytes = 0;     ///< bytes discarded while looking for a preamble
+  std::uint64_t counter_gaps = 0;      ///< samples missing per PacketCounter
+};
+
+class MtData2Parser {
+ public:
+  using Callback = std::function<void(const MtData2Sample&)>;
+  explicit MtData2Parser(Callback on_sample) : on_sample_(std::move(on_sample)) {}
+  /// Consumes bytes; calls back once per valid MTData2 message.
+  void feed(std::span<const std::uint8_t> bytes);
+  const MtParserStats& stats() const noexcept { return stats_; }
+
+ private:
+  void parse_buffer();
+  bool decode_payload(std::span<const std::uint8_t> data, MtData2Sample& out) const;
+  Callback on_sample_;
+  std::vector<std::uint8_t> buffer_;
+  MtParserStats stats_;
+  std::optional<std::uint16_t> last_counter_;
+};
+
+/// Builds one MTData2 message (for tests and simulators): counter, fine time, gyro, accel.
+std::vector<std::uint8_t> build_mtdata2(std::uint16_t counter, std::uint32_t sample_time_fine,
+                                        const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel);
+
+}  // namespace liod::drivers::xsens
