@@ -24,9 +24,15 @@ cmake --build build -j"$(nproc)" --target liod liod-sim liod-eval
 mkdir -p "$out"
 echo "== simulating a ${duration} s ${route} drive (seed ${seed}, up to ${speed} m/s) into ${out}"
 build/bin/liod-sim --route "$route" --seed "$seed" --duration "$duration" --max-speed "$speed" --out "$out"
-echo "== replaying it through liod"
-build/bin/liod replay --config config/liod.yaml --config config/vehicles/liod-sim-car.yaml --config "$out/extrinsics.yaml" \
-  --pcap "$out/lidar.pcap" --imu "$out/imu.csv" --trajectory "$out/liod.tum" --scan-log "$out/scans.csv"
-echo "== accuracy against the ground truth"
-build/bin/liod-eval --gt "$out/groundtruth.tum" --est "$out/liod.tum" --plot "$out/trajectory.png"
-echo "plot: $out/trajectory.png"
+configs=(--config config/liod.yaml --config config/vehicles/liod-sim-car.yaml --config "$out/extrinsics.yaml")
+echo "== replaying it through liod: odometry only"
+build/bin/liod replay "${configs[@]}" --pcap "$out/lidar.pcap" --imu "$out/imu.csv" \
+  --trajectory "$out/odometry.tum" --scan-log "$out/scans.csv"
+echo "== replaying it through liod: odometry + loop closure (config/examples/slam.yaml)"
+build/bin/liod replay "${configs[@]}" --config config/examples/slam.yaml --pcap "$out/lidar.pcap" \
+  --imu "$out/imu.csv" --trajectory "$out/slam.tum"
+echo "== accuracy of the odometry against the ground truth"
+build/bin/liod-eval --gt "$out/groundtruth.tum" --est "$out/odometry.tum" --plot "$out/odometry.png"
+echo "== accuracy with loop closure"
+build/bin/liod-eval --gt "$out/groundtruth.tum" --est "$out/slam.tum" --plot "$out/slam.png"
+echo "plots: $out/odometry.png $out/slam.png"

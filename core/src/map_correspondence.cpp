@@ -23,16 +23,34 @@ Moments moments(const std::array<Eigen::Vector3d, LocalMap::kMaxNeighbours>& pts
   return m;
 }
 
+struct Neighbourhood {
+  std::array<Eigen::Vector3d, LocalMap::kMaxNeighbours> points;
+  int count = 0;
+  Moments moments;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;  // eigenvalues ascending
+};
+
+// The query's map neighbours and their principal axes, if it has enough of them.
+std::optional<Neighbourhood> neighbourhood(const LocalMap& map, const Eigen::Vector3d& query,
+                                           const CorrespondenceParams& params) {
+  Neighbourhood nb;
+  nb.count = map.nearest(query, params.neighbours, params.max_distance_m, nb.points);
+  if (nb.count < params.neighbours) return std::nullopt;
+  nb.moments = moments(nb.points, nb.count);
+  nb.eig.computeDirect(nb.moments.covariance);
+  return nb;
+}
+
 }  // namespace
 
 std::optional<LinearResidual> plane_correspondence(const LocalMap& map, const Eigen::Vector3d& query,
                                                    const CorrespondenceParams& params) {
-  std::array<Eigen::Vector3d, LocalMap::kMaxNeighbours> nn;
-  const int n = map.nearest(query, params.neighbours, params.max_distance_m, nn);
-  if (n < params.neighbours) return std::nullopt;
-  const Moments m = moments(nn, n);
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-  eig.computeDirect(m.covariance);
+  const auto nb = neighbourhood(map, query, params);
+  if (!nb) return std::nullopt;
+  const auto& eig = nb->eig;
+  const auto& nn = nb->points;
+  const int n = nb->count;
+  const Moments& m = nb->moments;
   // Neighbours along one scan ring are nearly collinear: every plane through that line fits them,
   // so the normal would be arbitrary. Demand a real second dimension.
   const Eigen::Vector3d ev = eig.eigenvalues();
@@ -47,12 +65,10 @@ std::optional<LinearResidual> plane_correspondence(const LocalMap& map, const Ei
 
 std::optional<LinearResidual> line_correspondence(const LocalMap& map, const Eigen::Vector3d& query,
                                                   const CorrespondenceParams& params) {
-  std::array<Eigen::Vector3d, LocalMap::kMaxNeighbours> nn;
-  const int n = map.nearest(query, params.neighbours, params.max_distance_m, nn);
-  if (n < params.neighbours) return std::nullopt;
-  const Moments m = moments(nn, n);
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-  eig.computeDirect(m.covariance);
+  const auto nb = neighbourhood(map, query, params);
+  if (!nb) return std::nullopt;
+  const auto& eig = nb->eig;
+  const Moments& m = nb->moments;
   const Eigen::Vector3d ev = eig.eigenvalues();
   if (!(ev(2) > params.min_line_ratio * ev(1))) return std::nullopt;
   const Eigen::Vector3d direction = eig.eigenvectors().col(2).normalized();

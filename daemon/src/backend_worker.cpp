@@ -7,16 +7,9 @@
 
 #include "liod/backend/map_store.hpp"
 
+#include "liod/daemon/percentile.hpp"
+
 namespace liod {
-namespace {
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))];
-}
-
-}  // namespace
 
 BackendWorker::BackendWorker(const Config& config) : config_(config), backend_(config) {
   if (config.backend.persist) writer_ = std::make_unique<StateWriter>(config.output.state_dir);

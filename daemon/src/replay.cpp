@@ -17,14 +17,10 @@
 #include "liod/daemon/sources.hpp"
 #include "liod/daemon/trajectory_writer.hpp"
 
+#include "liod/daemon/percentile.hpp"
+
 namespace liod {
 namespace {
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))];
-}
 
 class ProgressBar {
  public:
