@@ -36,15 +36,6 @@ inline Eigen::Matrix3d right_jacobian(const Eigen::Vector3d& phi) {
   return Eigen::Matrix3d::Identity() - (1.0 - std::cos(angle)) / a2 * w + (angle - std::sin(angle)) / (a2 * angle) * w * w;
 }
 
-/// Inverse of the right Jacobian, Forster eq. (9).
-inline Eigen::Matrix3d right_jacobian_inverse(const Eigen::Vector3d& phi) {
-  const double angle = phi.norm();
-  const Eigen::Matrix3d w = hat(phi);
-  if (angle < 1e-6) return Eigen::Matrix3d::Identity() + 0.5 * w;
-  return Eigen::Matrix3d::Identity() + 0.5 * w +
-         (1.0 / (angle * angle) - (1.0 + std::cos(angle)) / (2.0 * angle * std::sin(angle))) * w * w;
-}
-
 /// Re-orthonormalises a rotation that accumulated rounding error.
 inline Eigen::Matrix3d normalize(const Eigen::Matrix3d& r) { return Eigen::Quaterniond(r).normalized().toRotationMatrix(); }
 
