@@ -81,9 +81,10 @@ const char* to_string(Format format) {
   return "auto";
 }
 
-Trajectory read_tum(std::istream& in, const std::string& name) {
-  Trajectory traj;
-  traj.name = name;
+// Calls row(values, line number) for every non-empty line of `columns` numbers; anything else is
+// an error naming the file and line.
+template <typename Row>
+void for_each_row(std::istream& in, const std::string& name, std::size_t columns, const char* layout, Row row) {
   std::string line;
   std::vector<double> v;
   std::string bad;
@@ -92,7 +93,15 @@ Trajectory read_tum(std::istream& in, const std::string& name) {
     ++line_no;
     if (!parse_numbers(line, v, bad)) fail(name, line_no, "not a number: '" + bad + "'");
     if (v.empty()) continue;
-    if (v.size() != 8) fail(name, line_no, expect_message(8, "t x y z qx qy qz qw", v.size()));
+    if (v.size() != columns) fail(name, line_no, expect_message(columns, layout, v.size()));
+    row(v, line_no);
+  }
+}
+
+Trajectory read_tum(std::istream& in, const std::string& name) {
+  Trajectory traj;
+  traj.name = name;
+  for_each_row(in, name, 8, "t x y z qx qy qz qw", [&](const std::vector<double>& v, std::size_t line_no) {
     if (!traj.stamps.empty() && v[0] <= traj.stamps.back()) {
       std::ostringstream msg;
       msg << std::setprecision(17) << "timestamp " << v[0] << " does not increase (previous " << traj.stamps.back()
@@ -109,7 +118,7 @@ Trajectory read_tum(std::istream& in, const std::string& name) {
     pose.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
     traj.stamps.push_back(v[0]);
     traj.poses.push_back(pose);
-  }
+  });
   if (traj.poses.empty()) throw InputError(name + ": no poses (empty file or only comments)");
   return traj;
 }
@@ -117,40 +126,25 @@ Trajectory read_tum(std::istream& in, const std::string& name) {
 Trajectory read_kitti(std::istream& in, const std::string& name) {
   Trajectory traj;
   traj.name = name;
-  std::string line;
-  std::vector<double> v;
-  std::string bad;
-  std::size_t line_no = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (!parse_numbers(line, v, bad)) fail(name, line_no, "not a number: '" + bad + "'");
-    if (v.empty()) continue;
-    if (v.size() != 12) fail(name, line_no, expect_message(12, "r11 r12 r13 tx r21 r22 r23 ty r31 r32 r33 tz", v.size()));
+  for_each_row(in, name, 12, "r11 r12 r13 tx r21 r22 r23 ty r31 r32 r33 tz", [&](const std::vector<double>& v,
+                                                                                 std::size_t line_no) {
     Eigen::Matrix3d R;
     R << v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10];
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
     pose.linear() = project_to_so3(R, name, line_no);
     pose.translation() = Eigen::Vector3d(v[3], v[7], v[11]);
     traj.poses.push_back(pose);
-  }
+  });
   if (traj.poses.empty()) throw InputError(name + ": no poses (empty file or only comments)");
   return traj;
 }
 
 std::vector<double> read_times(std::istream& in, const std::string& name) {
   std::vector<double> stamps;
-  std::string line;
-  std::vector<double> v;
-  std::string bad;
-  std::size_t line_no = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (!parse_numbers(line, v, bad)) fail(name, line_no, "not a number: '" + bad + "'");
-    if (v.empty()) continue;
-    if (v.size() != 1) fail(name, line_no, expect_message(1, "t", v.size()));
+  for_each_row(in, name, 1, "t", [&](const std::vector<double>& v, std::size_t line_no) {
     if (!stamps.empty() && v[0] <= stamps.back()) fail(name, line_no, "timestamp does not increase");
     stamps.push_back(v[0]);
-  }
+  });
   if (stamps.empty()) throw InputError(name + ": no timestamps");
   return stamps;
 }
