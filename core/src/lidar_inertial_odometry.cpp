@@ -282,11 +282,15 @@ bool LidarInertialOdometry::initialize_velocity(const Scan& first, const Scan& s
                 base.rotation * preintegration.delta_position(base.gyro_bias, base.accel_bias)) /
                span;
   }
-  constexpr int kMinResiduals = 100;
+  // Few matches still beat the wide prior: starting from zero speed, a moving vehicle's scans are
+  // deskewed metres wrong and the filter can settle on a false standstill. Trust them less.
+  constexpr int kMinResiduals = 20;
+  constexpr int kConfidentResiduals = 100;
   if (last.residuals < kMinResiduals) return false;  // no structure to tell: stay with the wide prior
   state_.velocity = velocity;
   // Good to a fraction of a metre per second; the filter refines it from here.
-  covariance_.block<3, 3>(6, 6) = Eigen::Matrix3d::Identity() * 0.25;
+  const double speed_std = last.residuals >= kConfidentResiduals ? 0.5 : 2.0;
+  covariance_.block<3, 3>(6, 6) = Eigen::Matrix3d::Identity() * speed_std * speed_std;
   covariance_.block<3, 3>(6, 0).setZero();
   covariance_.block<3, 3>(0, 6).setZero();
   return true;
