@@ -2,23 +2,26 @@
 // liod's threads and rings, shared by `liod run`, `liod record` and `liod replay`:
 //
 //   LiDAR source thread --ScanItem ring--> odometry thread --PoseEvent ring--> publisher thread
-//   IMU source thread  ---ImuItem ring--->      |                               (pose socket, sinks)
-//                                               +--Keyframe ring--> backend thread (stub: counts)
+//   IMU source thread  ---ImuItem ring--->      |    |                          (pose socket, sinks)
+//          |  ^                                 |    +--Keyframe ring--> backend thread
+//          |  +------ latest scan update -------+
+//          +--------------------- IMU-rate PoseEvent ring ---------------> publisher thread
 //
 // A source is live (UDP socket, serial port, SocketCAN) or a file (pcap, IMU CSV); either way it
 // hands raw packets / samples to LidarOutput / ImuOutput, which own the decoding, time
 // correction and ring hand-off, so downstream cannot tell replay from live.
 //
 // Ordering (what the odometry sees, in which order):
-// - Live (`Ordering::Arrival`): IMU samples are fed as they arrive (IMU-rate poses go out at
-//   once); a scan is processed as soon as the IMU has reached its end time, or after
+// - Live (`Ordering::Arrival`): IMU samples are fed as they arrive; the IMU thread itself turns
+//   each sample into an IMU-rate pose (the last scan update propagated, ImuRatePropagator), so
+//   those never wait behind a scan update. A scan is processed as soon as the IMU has reached its end time, or after
 //   time.imu_wait_s without it. A scan's pose depends only on the IMU samples up to the first
 //   one past its end, so it does not depend on thread timing while the IMU keeps up.
 // - Replay as fast as possible (`Ordering::Lockstep`): sources run unthrottled and the rings are
 //   lossless (producers wait for room), and the odometry consumes in data order exactly like the
 //   original single-threaded loop: before a scan, IMU samples up to its end + 20 ms; the scan is
-//   processed once the IMU reaches its end (or the IMU log ended). Same input -> same call
-//   sequence -> same poses, every run.
+//   processed once the IMU reaches its end (or the IMU log ended); IMU-rate poses are made on the
+//   odometry thread in that same order. Same input -> same call sequence -> same poses, every run.
 
 #include <Eigen/Core>
 #include <atomic>
@@ -35,6 +38,7 @@
 
 #include "liod/config.hpp"
 #include "liod/daemon/backend_worker.hpp"
+#include "liod/daemon/imu_rate_propagator.hpp"
 #include "liod/daemon/pose_protocol.hpp"
 #include "liod/drivers/rs_helios.hpp"
 #include "liod/drivers/spsc_ring.hpp"
@@ -69,6 +73,8 @@ struct PoseEvent {
   pose::PoseMessage message;
   ScanDiagnostics diagnostics;        ///< scan poses only
   std::int64_t input_steady_ns = 0;   ///< arrival of the input that produced it (latency)
+  std::int64_t process_start_ns = 0;  ///< scan poses: the odometry started on the scan
+  std::int64_t process_end_ns = 0;    ///< scan poses: the pose was ready
 };
 
 struct KeyframeEvent {
@@ -153,6 +159,8 @@ class ImuOutput {
   /// Host-clock correction from PPS (added to host-stamped samples by the transports).
   std::atomic<std::int64_t> pps_correction_ns{0};
   std::function<void(const ImuSample&)> tap;
+  /// Called on the IMU thread with every sample after it went to the ring (IMU-rate poses, live).
+  std::function<void(const ImuItem&)> on_sample;
 
  private:
   drivers::SpscRing<ImuItem>& ring_;
@@ -235,6 +243,11 @@ class Pipeline {
   std::string health_json(HealthRates& rates) const;
   LatencyStats::Summary scan_latency() const { return scan_latency_.summary(); }
   LatencyStats::Summary imu_latency() const { return imu_latency_.summary(); }
+  /// The scan latency by stage: in the ring and waiting for IMU data / odometry / to the socket.
+  struct ScanStages {
+    LatencyStats::Summary wait, process, publish;
+  };
+  ScanStages scan_stages() const { return {scan_wait_.summary(), scan_process_.summary(), scan_publish_.summary()}; }
   /// First error a thread died with ("" if none).
   std::string error() const;
 
@@ -247,6 +260,12 @@ class Pipeline {
   void apply_thread_config(const ThreadConfig& tc, const char* name);
   void fail(const std::string& what);
   void push_pose(PoseEvent& ev);
+  /// Host-time health flags (live ordering only: replay must not depend on thread timing).
+  std::uint32_t live_flags() const;
+  /// Propagates `item` from the latest anchor into an IMU-rate pose; false before the first anchor.
+  bool make_imu_pose(const ImuItem& item, PoseEvent& ev);
+  /// Live: the IMU thread's IMU-rate pose for each sample.
+  void publish_imu_pose(const ImuItem& item);
 
   Config config_;
   PipelineOptions options_;
@@ -256,12 +275,16 @@ class Pipeline {
   drivers::SpscRing<ScanItem> scan_ring_;
   drivers::SpscRing<ImuItem> imu_ring_;
   drivers::SpscRing<PoseEvent> pose_ring_;
+  drivers::SpscRing<PoseEvent> imu_pose_ring_;  // live: IMU thread -> publisher
   drivers::SpscRing<KeyframeEvent> keyframe_ring_;
   std::unique_ptr<LidarOutput> lidar_out_;
   std::unique_ptr<ImuOutput> imu_out_;
   std::unique_ptr<BackendWorker> backend_;
   std::unique_ptr<LidarSource> lidar_source_;
   std::unique_ptr<ImuSource> imu_source_;
+  ImuRatePropagator propagator_;  // used by one thread: the IMU thread live, the odometry thread in lockstep
+  AnchorExchange anchors_;        // live: odometry thread -> IMU thread
+  PoseEvent imu_event_;           // the IMU thread's reused event
   std::vector<std::function<void(const PoseEvent&)>> sinks_;
   std::vector<std::thread> threads_;
   int thread_count_ = 0;
@@ -271,7 +294,7 @@ class Pipeline {
   OdometryTotals totals_;
   std::atomic<std::uint64_t> scans_processed_{0}, backend_keyframes_{0};
   std::atomic<double> last_process_ms_{0.0};
-  LatencyStats scan_latency_, imu_latency_, queue_latency_;
+  LatencyStats scan_latency_, imu_latency_, scan_wait_, scan_process_, scan_publish_;
   std::atomic<std::uint64_t> socket_clients_{0}, socket_skipped_{0}, socket_dropped_{0};
   mutable std::mutex error_mutex_;
   std::string error_;
