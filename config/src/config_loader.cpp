@@ -210,6 +210,7 @@ Schema declare_schema(Config& c) {
   s.real("lidar.min_range_m", &c.lidar.min_range_m, 0.0, 10.0);
   s.real("lidar.max_range_m", &c.lidar.max_range_m, 1.0, 500.0);
   s.real("lidar.split_azimuth_deg", &c.lidar.split_azimuth_deg, 0.0, 359.99);
+  s.integer("lidar.packets_before_difop", &c.lidar.packets_before_difop, 0, 65536);
 
   s.real("imu.rate_hz", &c.imu.rate_hz, 10.0, 10000.0);
   s.real("imu.gyro_noise_density", &c.imu.gyro_noise_density, 1e-7, 1.0);

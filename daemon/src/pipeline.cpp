@@ -26,6 +26,7 @@ drivers::HeliosOptions helios_options(const Config& config) {
   o.msop.min_range_m = static_cast<float>(config.lidar.min_range_m);
   o.msop.max_range_m = static_cast<float>(config.lidar.max_range_m);
   o.split_azimuth_deg = config.lidar.split_azimuth_deg;
+  o.max_held_packets = static_cast<std::size_t>(config.lidar.packets_before_difop);
   return o;
 }
 
@@ -592,7 +593,7 @@ std::string Pipeline::health_json(HealthRates& rates) const {
   };
   j << "{\"version\":1,\"lidar\":{\"packets\":" << packets << ",\"packet_rate_hz\":" << rate(packets, rates.packets)
     << ",\"sweeps\":" << lidar_out_->sweeps() << ",\"lost_packets\":" << hs.lost_packets << ",\"rejected_packets\":"
-    << hs.rejected() << ",\"clock_offset_s\":" << static_cast<double>(lidar_out_->clock_offset_ns()) * 1e-9
+    << hs.rejected() << ",\"held_before_difop\":" << hs.held_for_calibration << ",\"clock_offset_s\":" << static_cast<double>(lidar_out_->clock_offset_ns()) * 1e-9
     << ",\"sensor_synced\":" << (lidar_out_->sensor_synced() ? "true" : "false") << ",\"clock_jumps\":"
     << lidar_out_->clock_jumps() << "},\"imu\":{\"samples\":" << imu << ",\"rate_hz\":" << rate(imu, rates.imu)
     << ",\"pps_correction_s\":" << static_cast<double>(imu_out_->pps_correction_ns.load()) * 1e-9

@@ -28,6 +28,7 @@ struct LidarConfig {
   double min_range_m = 0.1;      // decoder limits (sensor spec)
   double max_range_m = 180.0;
   double split_azimuth_deg = 0.0;
+  int packets_before_difop = 4096;  // without angles_csv: MSOP held until the first DIFOP (1 s is ~1500)
 };
 
 struct ImuConfig {
