@@ -31,7 +31,6 @@
 #include <memory>
 #include <mutex>
 #include <optional>
-#include <span>
 #include <string>
 #include <thread>
 #include <vector>
@@ -40,25 +39,12 @@
 #include "liod/daemon/backend_worker.hpp"
 #include "liod/daemon/imu_rate_propagator.hpp"
 #include "liod/daemon/pose_protocol.hpp"
-#include "liod/drivers/rs_helios.hpp"
+#include "liod/daemon/sensor_outputs.hpp"
 #include "liod/drivers/spsc_ring.hpp"
-#include "liod/drivers/time_sync.hpp"
 #include "liod/lidar_inertial_odometry.hpp"
 #include "liod/types.hpp"
 
 namespace liod {
-
-std::int64_t steady_ns() noexcept;
-
-struct ScanItem {
-  Scan scan;
-  std::int64_t ready_steady_ns = 0;  ///< when the packet completing the sweep arrived
-};
-
-struct ImuItem {
-  ImuSample sample;
-  std::int64_t arrival_steady_ns = 0;
-};
 
 /// Per-scan numbers for the scan log (the scan-rate PoseEvent carries them).
 struct ScanDiagnostics {
@@ -99,77 +85,6 @@ class LatencyStats {
   std::vector<double> window_;
   std::size_t next_ = 0;
   double max_ = 0;
-};
-
-/// What the LiDAR driver thread does with each UDP payload, whichever the source.
-class LidarOutput {
- public:
-  LidarOutput(const Config& config, drivers::SpscRing<ScanItem>& ring, bool lossless, const std::atomic<bool>& stop);
-  /// One datagram. `arrival_realtime_ns`: kernel receive time (live) or capture time (file).
-  void packet(std::span<const std::uint8_t> payload, std::int64_t arrival_realtime_ns, std::uint16_t dst_port);
-  /// End of stream: flush the decoder and close the ring.
-  void finish();
-  void heartbeat() noexcept { heartbeat_.store(steady_ns(), std::memory_order_relaxed); }
-
-  drivers::HeliosStats decoder_stats() const;
-  std::int64_t heartbeat_ns() const noexcept { return heartbeat_.load(std::memory_order_relaxed); }
-  std::uint64_t packets() const noexcept { return packets_.load(std::memory_order_relaxed); }
-  std::uint64_t lost_packets() const noexcept { return lost_.load(std::memory_order_relaxed); }
-  std::uint64_t sweeps() const noexcept { return sweeps_.load(std::memory_order_relaxed); }
-  std::int64_t last_sweep_steady_ns() const noexcept { return last_sweep_.load(std::memory_order_relaxed); }
-  /// Host - LiDAR clock offset in use (0 when the LiDAR's own time is used), and whether the
-  /// LiDAR reports GPS/PTP sync.
-  std::int64_t clock_offset_ns() const noexcept { return offset_used_.load(std::memory_order_relaxed); }
-  bool sensor_synced() const noexcept { return synced_.load(std::memory_order_relaxed); }
-  std::uint64_t clock_jumps() const noexcept { return jumps_.load(std::memory_order_relaxed); }
-
-  /// Called with every datagram before decoding (liod record).
-  std::function<void(std::span<const std::uint8_t>, std::int64_t, std::uint16_t)> tap;
-
- private:
-  void on_sweep(Scan& scan);
-  const Config& config_;
-  drivers::SpscRing<ScanItem>& ring_;
-  bool lossless_;
-  const std::atomic<bool>& stop_;
-  drivers::OffsetTracker offset_;
-  std::unique_ptr<drivers::RsHeliosDecoder> decoder_;
-  ScanItem item_;
-  std::int64_t packet_steady_ = 0;
-  mutable std::mutex stats_mutex_;  // decoder stats are copied out for health (once a second)
-  drivers::HeliosStats stats_copy_;
-  std::atomic<std::int64_t> heartbeat_{0};
-  std::atomic<std::uint64_t> packets_{0}, lost_{0}, sweeps_{0}, jumps_{0};
-  std::atomic<std::int64_t> last_sweep_{0};
-  std::atomic<std::int64_t> offset_used_{0};
-  std::atomic<bool> synced_{false};
-};
-
-/// What the IMU driver thread does with each sample, whichever the transport.
-class ImuOutput {
- public:
-  ImuOutput(drivers::SpscRing<ImuItem>& ring, bool lossless, const std::atomic<bool>& stop)
-      : ring_(ring), lossless_(lossless), stop_(stop) {}
-  void sample(const ImuSample& s);
-  void finish() { ring_.close(); }
-  void heartbeat() noexcept { heartbeat_.store(steady_ns(), std::memory_order_relaxed); }
-  std::int64_t heartbeat_ns() const noexcept { return heartbeat_.load(std::memory_order_relaxed); }
-  std::uint64_t samples() const noexcept { return samples_.load(std::memory_order_relaxed); }
-  std::int64_t last_sample_steady_ns() const noexcept { return last_.load(std::memory_order_relaxed); }
-  /// Host-clock correction from PPS (added to host-stamped samples by the transports).
-  std::atomic<std::int64_t> pps_correction_ns{0};
-  std::function<void(const ImuSample&)> tap;
-  /// Called on the IMU thread with every sample after it went to the ring (IMU-rate poses, live).
-  std::function<void(const ImuItem&)> on_sample;
-
- private:
-  drivers::SpscRing<ImuItem>& ring_;
-  bool lossless_;
-  const std::atomic<bool>& stop_;
-  ImuItem item_;
-  std::atomic<std::int64_t> heartbeat_{0};
-  std::atomic<std::uint64_t> samples_{0};
-  std::atomic<std::int64_t> last_{0};
 };
 
 class LidarSource {
