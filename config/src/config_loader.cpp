@@ -315,6 +315,7 @@ Schema declare_schema(Config& c) {
            {{"auto", LidarClock::kAuto}, {"sensor", LidarClock::kSensor}, {"host", LidarClock::kHost}});
   s.real("time.offset_window_s", &c.time.offset_window_s, 0.1, 600.0);
   s.real("time.jump_threshold_s", &c.time.jump_threshold_s, 0.001, 3600.0);
+  s.real("time.jump_flag_s", &c.time.jump_flag_s, 0.0, 3600.0);
   s.real("time.imu_wait_s", &c.time.imu_wait_s, 0.0, 5.0);
   s.text("time.pps_chip", &c.time.pps_chip);
   s.integer("time.pps_line", &c.time.pps_line, 0, 1023);

@@ -81,7 +81,8 @@ Pipeline::Pipeline(const Config& config, PipelineOptions options)
       keyframe_ring_(static_cast<std::size_t>(config.threads.keyframe_ring), &backend_wakeup_) {
   const bool lossless = options_.ordering == Ordering::Lockstep;
   lidar_out_ = std::make_unique<LidarOutput>(config_, scan_ring_, lossless, source_stop_);
-  imu_out_ = std::make_unique<ImuOutput>(imu_ring_, lossless, source_stop_);
+  imu_out_ = std::make_unique<ImuOutput>(imu_ring_, lossless, source_stop_,
+                                         static_cast<std::int64_t>(config_.time.jump_threshold_s * 1e9));
   if (!lossless && options_.imu_rate_poses) imu_out_->on_sample = [this](const ImuItem& item) { publish_imu_pose(item); };
   if (config_.backend.enabled) backend_ = std::make_unique<BackendWorker>(config_);
 }
@@ -208,7 +209,15 @@ std::uint32_t Pipeline::live_flags() const {
   std::uint32_t f = 0;
   if (imu_source_ != nullptr && now - imu_out_->last_sample_steady_ns() > imu_lost_ns) f |= pose::kImuLost;
   if (now - lidar_out_->last_sweep_steady_ns() > lidar_lost_ns) f |= pose::kLidarLost;
+  const std::int64_t last_jump = std::max({lidar_out_->last_step_steady_ns(), imu_out_->last_step_steady_ns(),
+                                           host_jump_steady_ns_.load(std::memory_order_relaxed)});
+  if (last_jump != 0 && now - last_jump < static_cast<std::int64_t>(config_.time.jump_flag_s * 1e9)) f |= pose::kClockJump;
   return f;
+}
+
+void Pipeline::note_host_clock_jump() noexcept {
+  host_jumps_.fetch_add(1, std::memory_order_relaxed);
+  host_jump_steady_ns_.store(steady_ns(), std::memory_order_relaxed);
 }
 
 bool Pipeline::make_imu_pose(const ImuItem& item, PoseEvent& ev) {
@@ -482,7 +491,12 @@ std::string Pipeline::health_json(HealthRates& rates) const {
     << ",\"sweeps\":" << lidar_out_->sweeps() << ",\"lost_packets\":" << hs.lost_packets << ",\"rejected_packets\":"
     << hs.rejected() << ",\"held_before_difop\":" << hs.held_for_calibration << ",\"clock_offset_s\":" << static_cast<double>(lidar_out_->clock_offset_ns()) * 1e-9
     << ",\"sensor_synced\":" << (lidar_out_->sensor_synced() ? "true" : "false") << ",\"clock_jumps\":"
-    << lidar_out_->clock_jumps() << "},\"imu\":{\"samples\":" << imu << ",\"rate_hz\":" << rate(imu, rates.imu)
+    << lidar_out_->clock_jumps() << "},\"time\":{\"host_clock_jumps\":" << host_jumps_.load()
+    << ",\"lidar_steps\":" << lidar_out_->clock_steps()
+    << ",\"lidar_step_correction_s\":" << static_cast<double>(lidar_out_->step_correction_ns()) * 1e-9
+    << ",\"imu_steps\":" << imu_out_->clock_steps()
+    << ",\"imu_step_correction_s\":" << static_cast<double>(imu_out_->step_correction_ns()) * 1e-9
+    << "},\"imu\":{\"samples\":" << imu << ",\"rate_hz\":" << rate(imu, rates.imu)
     << ",\"pps_correction_s\":" << static_cast<double>(imu_out_->pps_correction_ns.load()) * 1e-9
     << "},\"odometry\":{\"scans\":" << scans << ",\"scan_rate_hz\":" << rate(scans, rates.scans)
     << ",\"last_process_ms\":" << last_process_ms_.load() << "},\"rings\":{";

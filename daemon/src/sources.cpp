@@ -14,8 +14,7 @@
 
 namespace liod {
 
-template <typename Heartbeat>
-bool PaceClock::wait_until(std::int64_t data_ns, const std::atomic<bool>& stop, Heartbeat&& heartbeat) const {
+bool PaceClock::wait_until(std::int64_t data_ns, const std::atomic<bool>& stop, const std::function<void()>& heartbeat) const {
   if (pace <= 0.0) return !stop.load(std::memory_order_relaxed);
   const auto due = host_start_steady_ns + static_cast<std::int64_t>(static_cast<double>(data_ns - data_start_ns) / pace);
   for (;;) {
@@ -131,7 +130,6 @@ void SerialImuSource::run(ImuOutput& out, const std::atomic<bool>& stop) {
   std::uint32_t last_fine = 0;
   std::int64_t fine_wraps = 0;
   bool have_fine = false;
-  double last_time = -1.0;
   drivers::xsens::MtData2Parser parser([&](const drivers::xsens::MtData2Sample& m) {
     if (!m.rate_of_turn || !m.acceleration) return;
     std::int64_t t = read_time;
@@ -144,8 +142,6 @@ void SerialImuSource::run(ImuOutput& out, const std::atomic<bool>& stop) {
     }
     ImuSample s;
     s.time = static_cast<double>(t + out.pps_correction_ns.load(std::memory_order_relaxed)) * 1e-9;
-    if (s.time <= last_time) return;  // duplicate or a clock step backwards: the odometry needs order
-    last_time = s.time;
     s.gyro = *m.rate_of_turn;
     s.accel = *m.acceleration;
     out.sample(s);
@@ -188,7 +184,6 @@ std::string CanImuSource::describe() const {
 void CanImuSource::run(ImuOutput& out, const std::atomic<bool>& stop) {
   const auto& c = config_.drivers.imu;
   drivers::CanImuDecoder decoder(c.can_profile, c.j1939_source_address, c.can_signals, 1.5 / config_.imu.rate_hz);
-  double last_time = -1.0;
   while (!stop.load(std::memory_order_relaxed)) {
     try {
       drivers::SocketCan can(c.can_interface);
@@ -199,8 +194,6 @@ void CanImuSource::run(ImuOutput& out, const std::atomic<bool>& stop) {
         if (!can.read(frame, 50)) continue;
         if (auto s = decoder.feed(frame)) {
           s->time += static_cast<double>(out.pps_correction_ns.load(std::memory_order_relaxed)) * 1e-9;
-          if (s->time <= last_time) continue;
-          last_time = s->time;
           out.sample(*s);
         }
       }

@@ -163,6 +163,9 @@ class Pipeline {
     LatencyStats::Summary wait, process, publish;
   };
   ScanStages scan_stages() const { return {scan_wait_.summary(), scan_process_.summary(), scan_publish_.summary()}; }
+  /// The host clock was stepped (run_command's ClockJumpDetector): poses carry kClockJump for
+  /// time.jump_flag_s (so they do after a step of the LiDAR's or the IMU's own time).
+  void note_host_clock_jump() noexcept;
   /// First error a thread died with ("" if none).
   std::string error() const;
 
@@ -207,7 +210,8 @@ class Pipeline {
   std::atomic<std::int64_t> hb_odometry_{0}, hb_publisher_{0}, hb_backend_{0};
   std::atomic<bool> imu_done_{false};
   OdometryTotals totals_;
-  std::atomic<std::uint64_t> scans_processed_{0}, backend_keyframes_{0};
+  std::atomic<std::uint64_t> scans_processed_{0}, backend_keyframes_{0}, host_jumps_{0};
+  std::atomic<std::int64_t> host_jump_steady_ns_{0};
   std::atomic<double> last_process_ms_{0.0};
   LatencyStats scan_latency_, imu_latency_, scan_wait_, scan_process_, scan_publish_;
   std::atomic<std::uint64_t> socket_clients_{0}, socket_skipped_{0}, socket_dropped_{0};

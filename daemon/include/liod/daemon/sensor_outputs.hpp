@@ -6,8 +6,10 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <span>
 
 #include "liod/config.hpp"
@@ -51,25 +53,36 @@ class LidarOutput {
   std::int64_t clock_offset_ns() const noexcept { return offset_used_.load(std::memory_order_relaxed); }
   bool sensor_synced() const noexcept { return synced_.load(std::memory_order_relaxed); }
   std::uint64_t clock_jumps() const noexcept { return jumps_.load(std::memory_order_relaxed); }
+  /// Steps of the LiDAR's time taken out (live only; see drivers::ClockStepBridge), the total
+  /// correction, and when the last one was seen (steady clock, 0 = never).
+  std::uint64_t clock_steps() const noexcept { return steps_.load(std::memory_order_relaxed); }
+  std::int64_t step_correction_ns() const noexcept { return step_correction_.load(std::memory_order_relaxed); }
+  std::int64_t last_step_steady_ns() const noexcept { return last_step_.load(std::memory_order_relaxed); }
 
   /// Called with every datagram before decoding (liod record).
   std::function<void(std::span<const std::uint8_t>, std::int64_t, std::uint16_t)> tap;
 
  private:
   void on_sweep(Scan& scan);
+  /// The host - LiDAR offset the configuration's lidar_clock calls for now.
+  std::int64_t clock_offset() const;
+  /// An MSOP header's time: offset tracking and step bridging.
+  void track_time(std::int64_t header_ns, std::int64_t arrival_ns);
   const Config& config_;
   drivers::SpscRing<ScanItem>& ring_;
   bool lossless_;
   const std::atomic<bool>& stop_;
   drivers::OffsetTracker offset_;
+  std::optional<drivers::ClockStepBridge> bridge_;  // live ordering only: replay has no arrival clock
+  std::int64_t shift_ns_ = 0;  // offset + step correction as of the last packet: added to a sweep it ended
   std::unique_ptr<drivers::RsHeliosDecoder> decoder_;
   ScanItem item_;
   std::int64_t packet_steady_ = 0;
   mutable std::mutex stats_mutex_;  // decoder stats are copied out for health (once a second)
   drivers::HeliosStats stats_copy_;
   std::atomic<std::int64_t> heartbeat_{0};
-  std::atomic<std::uint64_t> packets_{0}, lost_{0}, sweeps_{0}, jumps_{0};
-  std::atomic<std::int64_t> last_sweep_{0};
+  std::atomic<std::uint64_t> packets_{0}, lost_{0}, sweeps_{0}, jumps_{0}, steps_{0};
+  std::atomic<std::int64_t> last_sweep_{0}, step_correction_{0}, last_step_{0};
   std::atomic<std::int64_t> offset_used_{0};
   std::atomic<bool> synced_{false};
 };
@@ -77,16 +90,21 @@ class LidarOutput {
 /// What the IMU driver thread does with each sample, whichever the transport.
 class ImuOutput {
  public:
-  ImuOutput(drivers::SpscRing<ImuItem>& ring, bool lossless, const std::atomic<bool>& stop)
-      : ring_(ring), lossless_(lossless), stop_(stop) {}
+  /// Without `lossless` (live ordering) steps of the sample times beyond `step_threshold_ns` are
+  /// taken out (drivers::ClockStepBridge).
+  ImuOutput(drivers::SpscRing<ImuItem>& ring, bool lossless, const std::atomic<bool>& stop, std::int64_t step_threshold_ns);
   void sample(const ImuSample& s);
   void finish() { ring_.close(); }
   void heartbeat() noexcept { heartbeat_.store(steady_ns(), std::memory_order_relaxed); }
   std::int64_t heartbeat_ns() const noexcept { return heartbeat_.load(std::memory_order_relaxed); }
   std::uint64_t samples() const noexcept { return samples_.load(std::memory_order_relaxed); }
   std::int64_t last_sample_steady_ns() const noexcept { return last_.load(std::memory_order_relaxed); }
+  std::uint64_t clock_steps() const noexcept { return steps_.load(std::memory_order_relaxed); }
+  std::int64_t step_correction_ns() const noexcept { return step_correction_.load(std::memory_order_relaxed); }
+  std::int64_t last_step_steady_ns() const noexcept { return last_step_.load(std::memory_order_relaxed); }
   /// Host-clock correction from PPS (added to host-stamped samples by the transports).
   std::atomic<std::int64_t> pps_correction_ns{0};
+  /// Called with every sample as the transport delivered it (liod record).
   std::function<void(const ImuSample&)> tap;
   /// Called on the IMU thread with every sample after it went to the ring (IMU-rate poses, live).
   std::function<void(const ImuItem&)> on_sample;
@@ -95,10 +113,12 @@ class ImuOutput {
   drivers::SpscRing<ImuItem>& ring_;
   bool lossless_;
   const std::atomic<bool>& stop_;
+  std::optional<drivers::ClockStepBridge> bridge_;
+  double last_time_ = -std::numeric_limits<double>::infinity();  // of the last sample passed on
   ImuItem item_;
   std::atomic<std::int64_t> heartbeat_{0};
-  std::atomic<std::uint64_t> samples_{0};
-  std::atomic<std::int64_t> last_{0};
+  std::atomic<std::uint64_t> samples_{0}, steps_{0};
+  std::atomic<std::int64_t> last_{0}, step_correction_{0}, last_step_{0};
 };
 
 }  // namespace liod
