@@ -10,7 +10,6 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
-#include <limits>
 #include <sstream>
 
 #include "liod/daemon/pose_server.hpp"
@@ -262,6 +261,7 @@ void Pipeline::odometry_thread() {
   auto feed = [&](const ImuItem& item) {
     odometry.add_imu(item.sample);
     ++totals_.imu_fed;
+    odometry_imu_dropped_.store(odometry.dropped_imu_samples(), std::memory_order_relaxed);
     last_gyro = item.sample.gyro;
     // Live, the IMU thread makes the IMU-rate poses (publish_imu_pose).
     if (lockstep && imu_poses && make_imu_pose(item, imu_event)) push_pose(imu_event);
@@ -303,7 +303,8 @@ void Pipeline::odometry_thread() {
     d.features_ms = result->features_ms;
     d.registration_ms = result->registration_ms;
     d.map_ms = result->map_ms;
-    ev.input_steady_ns = item.ready_steady_ns;
+    ev.input_steady_ns = item.ready_steady_ns - item.queued_ns;
+    ev.queued_ns = item.queued_ns;
     ev.process_start_ns = start_ns;
     ev.process_end_ns = steady_ns();
     push_pose(ev);
@@ -407,7 +408,8 @@ void Pipeline::publisher_thread(PoseServer* server) {
         const std::int64_t written = steady_ns();
         (scan ? scan_latency_ : imu_latency_).add(static_cast<double>(written - ev.input_steady_ns) * 1e-3);
         if (scan) {
-          scan_wait_.add(static_cast<double>(ev.process_start_ns - ev.input_steady_ns) * 1e-3);
+          scan_receive_.add(static_cast<double>(ev.queued_ns) * 1e-3);
+          scan_wait_.add(static_cast<double>(ev.process_start_ns - ev.input_steady_ns - ev.queued_ns) * 1e-3);
           scan_process_.add(static_cast<double>(ev.process_end_ns - ev.process_start_ns) * 1e-3);
           scan_publish_.add(static_cast<double>(written - ev.process_end_ns) * 1e-3);
         }
@@ -489,7 +491,8 @@ std::string Pipeline::health_json(HealthRates& rates) const {
   };
   j << "{\"version\":1,\"lidar\":{\"packets\":" << packets << ",\"packet_rate_hz\":" << rate(packets, rates.packets)
     << ",\"sweeps\":" << lidar_out_->sweeps() << ",\"lost_packets\":" << hs.lost_packets << ",\"rejected_packets\":"
-    << hs.rejected() << ",\"held_before_difop\":" << hs.held_for_calibration << ",\"clock_offset_s\":" << static_cast<double>(lidar_out_->clock_offset_ns()) * 1e-9
+    << hs.rejected() << ",\"transport_lost\":" << lidar_out_->transport.lost.load() << ",\"transport_refused\":"
+    << lidar_out_->transport.refused.load() << ",\"held_before_difop\":" << hs.held_for_calibration << ",\"clock_offset_s\":" << static_cast<double>(lidar_out_->clock_offset_ns()) * 1e-9
     << ",\"sensor_synced\":" << (lidar_out_->sensor_synced() ? "true" : "false") << ",\"clock_jumps\":"
     << lidar_out_->clock_jumps() << "},\"time\":{\"host_clock_jumps\":" << host_jumps_.load()
     << ",\"lidar_steps\":" << lidar_out_->clock_steps()
@@ -497,7 +500,9 @@ std::string Pipeline::health_json(HealthRates& rates) const {
     << ",\"imu_steps\":" << imu_out_->clock_steps()
     << ",\"imu_step_correction_s\":" << static_cast<double>(imu_out_->step_correction_ns()) * 1e-9
     << "},\"imu\":{\"samples\":" << imu << ",\"rate_hz\":" << rate(imu, rates.imu)
-    << ",\"pps_correction_s\":" << static_cast<double>(imu_out_->pps_correction_ns.load()) * 1e-9
+    << ",\"transport_lost\":" << imu_out_->transport.lost.load() << ",\"transport_refused\":"
+    << imu_out_->transport.refused.load() << ",\"out_of_order\":" << imu_out_->out_of_order()
+    << ",\"odometry_dropped\":" << odometry_imu_dropped_.load() << ",\"pps_correction_s\":" << static_cast<double>(imu_out_->pps_correction_ns.load()) * 1e-9
     << "},\"odometry\":{\"scans\":" << scans << ",\"scan_rate_hz\":" << rate(scans, rates.scans)
     << ",\"last_process_ms\":" << last_process_ms_.load() << "},\"rings\":{";
   ring("scan", scan_ring_);
@@ -511,6 +516,8 @@ std::string Pipeline::health_json(HealthRates& rates) const {
   ring("keyframe", keyframe_ring_);
   j << "},\"latency_us\":{";
   latency("scan_to_socket", scan_latency_);
+  j << ',';
+  latency("scan_receive", scan_receive_);
   j << ',';
   latency("scan_wait", scan_wait_);
   j << ',';

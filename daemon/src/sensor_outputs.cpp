@@ -39,8 +39,10 @@ LidarOutput::LidarOutput(const Config& config, drivers::SpscRing<ScanItem>& ring
   heartbeat();
 }
 
-void LidarOutput::packet(std::span<const std::uint8_t> payload, std::int64_t arrival_ns, std::uint16_t dst_port) {
+void LidarOutput::packet(std::span<const std::uint8_t> payload, std::int64_t arrival_ns, std::uint16_t dst_port,
+                         std::int64_t queued_ns) {
   packet_steady_ = steady_ns();
+  packet_queued_ = queued_ns;
   heartbeat_.store(packet_steady_, std::memory_order_relaxed);
   packets_.fetch_add(1, std::memory_order_relaxed);
   if (tap) tap(payload, arrival_ns, dst_port);
@@ -112,6 +114,7 @@ void LidarOutput::on_sweep(Scan& scan) {
   using std::swap;
   swap(item_.scan, scan);
   item_.ready_steady_ns = packet_steady_;
+  item_.queued_ns = packet_queued_;
   sweeps_.fetch_add(1, std::memory_order_relaxed);
   last_sweep_.store(packet_steady_, std::memory_order_relaxed);
   // Exchange with the ring: item_ comes back with a recycled buffer, handed back to the decoder.
@@ -162,7 +165,10 @@ void ImuOutput::sample(const ImuSample& delivered) {
     }
   }
   // A duplicate, or a step back too small to be told from jitter: the odometry needs order.
-  if (s.time <= last_time_) return;
+  if (s.time <= last_time_) {
+    out_of_order_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
   last_time_ = s.time;
   item_.sample = s;
   item_.arrival_steady_ns = now;

@@ -101,10 +101,19 @@ void UdpLidarSource::run(LidarOutput& out, const std::atomic<bool>& stop) {
   std::uint64_t reported_kernel_drops = 0;
   while (!stop.load(std::memory_order_relaxed)) {
     out.heartbeat();
+    std::int64_t now = 0;  // one clock read per batch: the batch was taken at once
     receiver.poll(50, [&](const drivers::ReceivedDatagram& dg) {
-      out.packet(dg.payload, dg.kernel_time_ns != 0 ? dg.kernel_time_ns : drivers::realtime_ns(), dg.dst_port);
+      if (now == 0) now = drivers::realtime_ns();
+      if (dg.kernel_time_ns == 0) {
+        out.packet(dg.payload, now, dg.dst_port);
+      } else {
+        out.packet(dg.payload, dg.kernel_time_ns, dg.dst_port, std::max<std::int64_t>(0, now - dg.kernel_time_ns));
+      }
     });
-    const auto drops = receiver.stats().kernel_drops;
+    const auto& rs = receiver.stats();
+    out.transport.lost.store(rs.kernel_drops, std::memory_order_relaxed);
+    out.transport.refused.store(rs.filtered_source + rs.truncated, std::memory_order_relaxed);
+    const auto drops = rs.kernel_drops;
     if (drops > reported_kernel_drops) {
       spdlog::warn("LiDAR: the kernel dropped {} datagrams (receive buffer full)", drops - reported_kernel_drops);
       reported_kernel_drops = drops;
@@ -157,6 +166,8 @@ void SerialImuSource::run(ImuOutput& out, const std::atomic<bool>& stop) {
         if (n == 0) continue;
         read_time = drivers::realtime_ns();
         parser.feed(std::span(buffer.data(), n));
+        out.transport.lost.store(parser.stats().counter_gaps, std::memory_order_relaxed);
+        out.transport.refused.store(parser.stats().bad_checksum + parser.stats().malformed, std::memory_order_relaxed);
       }
     } catch (const std::exception& e) {
       // Unplugged adapter or a device not there yet: retry, never die (the IMU-lost flag and the
@@ -192,7 +203,10 @@ void CanImuSource::run(ImuOutput& out, const std::atomic<bool>& stop) {
       while (!stop.load(std::memory_order_relaxed)) {
         out.heartbeat();
         if (!can.read(frame, 50)) continue;
-        if (auto s = decoder.feed(frame)) {
+        auto s = decoder.feed(frame);
+        out.transport.lost.store(decoder.stats().unpaired, std::memory_order_relaxed);
+        out.transport.refused.store(decoder.stats().not_available, std::memory_order_relaxed);
+        if (s) {
           s->time += static_cast<double>(out.pps_correction_ns.load(std::memory_order_relaxed)) * 1e-9;
           out.sample(*s);
         }

@@ -154,6 +154,7 @@ int main(int argc, char** argv) {
   std::printf("scan latency, packet arrival -> pose written (pipeline): median %.2f ms, p99 %.2f ms (n=%zu)\n", sl.median_us / 1e3,
               sl.p99_us / 1e3, sl.count);
   const auto stages = pipeline.scan_stages();
+  print_stage("socket (kernel -> LiDAR thread):", stages.receive);
   print_stage("ring + wait for IMU data:", stages.wait);
   print_stage("odometry (process):", stages.process);
   print_stage("pose ring -> written to the socket:", stages.publish);

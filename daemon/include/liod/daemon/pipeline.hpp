@@ -59,6 +59,7 @@ struct PoseEvent {
   pose::PoseMessage message;
   ScanDiagnostics diagnostics;        ///< scan poses only
   std::int64_t input_steady_ns = 0;   ///< arrival of the input that produced it (latency)
+  std::int64_t queued_ns = 0;         ///< scan poses: of that, waiting in the socket for the driver thread
   std::int64_t process_start_ns = 0;  ///< scan poses: the odometry started on the scan
   std::int64_t process_end_ns = 0;    ///< scan poses: the pose was ready
 };
@@ -158,11 +159,14 @@ class Pipeline {
   std::string health_json(HealthRates& rates) const;
   LatencyStats::Summary scan_latency() const { return scan_latency_.summary(); }
   LatencyStats::Summary imu_latency() const { return imu_latency_.summary(); }
-  /// The scan latency by stage: in the ring and waiting for IMU data / odometry / to the socket.
+  /// The scan latency by stage: in the socket before the driver thread took the packet / in the
+  /// ring and waiting for IMU data / odometry / to the socket.
   struct ScanStages {
-    LatencyStats::Summary wait, process, publish;
+    LatencyStats::Summary receive, wait, process, publish;
   };
-  ScanStages scan_stages() const { return {scan_wait_.summary(), scan_process_.summary(), scan_publish_.summary()}; }
+  ScanStages scan_stages() const {
+    return {scan_receive_.summary(), scan_wait_.summary(), scan_process_.summary(), scan_publish_.summary()};
+  }
   /// The host clock was stepped (run_command's ClockJumpDetector): poses carry kClockJump for
   /// time.jump_flag_s (so they do after a step of the LiDAR's or the IMU's own time).
   void note_host_clock_jump() noexcept;
@@ -210,10 +214,10 @@ class Pipeline {
   std::atomic<std::int64_t> hb_odometry_{0}, hb_publisher_{0}, hb_backend_{0};
   std::atomic<bool> imu_done_{false};
   OdometryTotals totals_;
-  std::atomic<std::uint64_t> scans_processed_{0}, backend_keyframes_{0}, host_jumps_{0};
+  std::atomic<std::uint64_t> scans_processed_{0}, backend_keyframes_{0}, host_jumps_{0}, odometry_imu_dropped_{0};
   std::atomic<std::int64_t> host_jump_steady_ns_{0};
   std::atomic<double> last_process_ms_{0.0};
-  LatencyStats scan_latency_, imu_latency_, scan_wait_, scan_process_, scan_publish_;
+  LatencyStats scan_latency_, imu_latency_, scan_receive_, scan_wait_, scan_process_, scan_publish_;
   std::atomic<std::uint64_t> socket_clients_{0}, socket_skipped_{0}, socket_dropped_{0};
   mutable std::mutex error_mutex_;
   std::string error_;

@@ -24,7 +24,14 @@ std::int64_t steady_ns() noexcept;
 
 struct ScanItem {
   Scan scan;
-  std::int64_t ready_steady_ns = 0;  ///< when the packet completing the sweep arrived
+  std::int64_t ready_steady_ns = 0;  ///< when the driver thread took the packet completing the sweep
+  std::int64_t queued_ns = 0;        ///< how long that packet had waited in the socket (live)
+};
+
+/// What a live transport counts below the decoding (socket, serial line, CAN), for health.
+struct TransportCounters {
+  std::atomic<std::uint64_t> lost{0};     ///< never reached liod: receive-buffer overflow, IMU counter gaps
+  std::atomic<std::uint64_t> refused{0};  ///< reached it unusable: other sender, truncated, bad checksum
 };
 
 struct ImuItem {
@@ -36,8 +43,10 @@ struct ImuItem {
 class LidarOutput {
  public:
   LidarOutput(const Config& config, drivers::SpscRing<ScanItem>& ring, bool lossless, const std::atomic<bool>& stop);
-  /// One datagram. `arrival_realtime_ns`: kernel receive time (live) or capture time (file).
-  void packet(std::span<const std::uint8_t> payload, std::int64_t arrival_realtime_ns, std::uint16_t dst_port);
+  /// One datagram. `arrival_realtime_ns`: kernel receive time (live) or capture time (file);
+  /// `queued_ns`: how long it waited in the socket before this thread took it (live, else 0).
+  void packet(std::span<const std::uint8_t> payload, std::int64_t arrival_realtime_ns, std::uint16_t dst_port,
+              std::int64_t queued_ns = 0);
   /// End of stream: flush the decoder and close the ring.
   void finish();
   void heartbeat() noexcept { heartbeat_.store(steady_ns(), std::memory_order_relaxed); }
@@ -61,6 +70,8 @@ class LidarOutput {
 
   /// Called with every datagram before decoding (liod record).
   std::function<void(std::span<const std::uint8_t>, std::int64_t, std::uint16_t)> tap;
+  /// Kept up to date by a live source.
+  TransportCounters transport;
 
  private:
   void on_sweep(Scan& scan);
@@ -78,6 +89,7 @@ class LidarOutput {
   std::unique_ptr<drivers::RsHeliosDecoder> decoder_;
   ScanItem item_;
   std::int64_t packet_steady_ = 0;
+  std::int64_t packet_queued_ = 0;
   mutable std::mutex stats_mutex_;  // decoder stats are copied out for health (once a second)
   drivers::HeliosStats stats_copy_;
   std::atomic<std::int64_t> heartbeat_{0};
@@ -99,6 +111,8 @@ class ImuOutput {
   std::int64_t heartbeat_ns() const noexcept { return heartbeat_.load(std::memory_order_relaxed); }
   std::uint64_t samples() const noexcept { return samples_.load(std::memory_order_relaxed); }
   std::int64_t last_sample_steady_ns() const noexcept { return last_.load(std::memory_order_relaxed); }
+  /// Samples not passed on because their time was not after the previous one's.
+  std::uint64_t out_of_order() const noexcept { return out_of_order_.load(std::memory_order_relaxed); }
   std::uint64_t clock_steps() const noexcept { return steps_.load(std::memory_order_relaxed); }
   std::int64_t step_correction_ns() const noexcept { return step_correction_.load(std::memory_order_relaxed); }
   std::int64_t last_step_steady_ns() const noexcept { return last_step_.load(std::memory_order_relaxed); }
@@ -108,6 +122,8 @@ class ImuOutput {
   std::function<void(const ImuSample&)> tap;
   /// Called on the IMU thread with every sample after it went to the ring (IMU-rate poses, live).
   std::function<void(const ImuItem&)> on_sample;
+  /// Kept up to date by a live transport.
+  TransportCounters transport;
 
  private:
   drivers::SpscRing<ImuItem>& ring_;
@@ -117,7 +133,7 @@ class ImuOutput {
   double last_time_ = -std::numeric_limits<double>::infinity();  // of the last sample passed on
   ImuItem item_;
   std::atomic<std::int64_t> heartbeat_{0};
-  std::atomic<std::uint64_t> samples_{0}, steps_{0};
+  std::atomic<std::uint64_t> samples_{0}, steps_{0}, out_of_order_{0};
   std::atomic<std::int64_t> last_{0}, step_correction_{0}, last_step_{0};
 };
 
