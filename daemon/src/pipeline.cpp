@@ -200,7 +200,7 @@ void Pipeline::imu_thread(ImuSource* source) {
   finish();
 }
 
-std::uint32_t Pipeline::live_flags() const {
+std::uint32_t Pipeline::live_flags(double pose_time) const {
   if (options_.ordering == Ordering::Lockstep) return 0;
   const std::int64_t now = steady_ns();
   const auto imu_lost_ns = static_cast<std::int64_t>(config_.drivers.imu.lost_after_s * 1e9);
@@ -208,9 +208,15 @@ std::uint32_t Pipeline::live_flags() const {
   std::uint32_t f = 0;
   if (imu_source_ != nullptr && now - imu_out_->last_sample_steady_ns() > imu_lost_ns) f |= pose::kImuLost;
   if (now - lidar_out_->last_sweep_steady_ns() > lidar_lost_ns) f |= pose::kLidarLost;
-  const std::int64_t last_jump = std::max({lidar_out_->last_step_steady_ns(), imu_out_->last_step_steady_ns(),
-                                           host_jump_steady_ns_.load(std::memory_order_relaxed)});
-  if (last_jump != 0 && now - last_jump < static_cast<std::int64_t>(config_.time.jump_flag_s * 1e9)) f |= pose::kClockJump;
+  // A sensor's step is placed on the data timeline (a pose processed late is flagged by when its
+  // data was taken); the host clock's by when it was seen.
+  const double flag_s = config_.time.jump_flag_s;
+  auto after_step = [&](double step_time) { return step_time <= pose_time && pose_time < step_time + flag_s; };
+  const std::int64_t host_jump = host_jump_steady_ns_.load(std::memory_order_relaxed);
+  if (after_step(lidar_out_->last_step_time()) || after_step(imu_out_->last_step_time()) ||
+      (host_jump != 0 && now - host_jump < static_cast<std::int64_t>(flag_s * 1e9))) {
+    f |= pose::kClockJump;
+  }
   return f;
 }
 
@@ -229,7 +235,7 @@ bool Pipeline::make_imu_pose(const ImuItem& item, PoseEvent& ev) {
   ev.message.covariance = anchor.pose_covariance;  // of the last scan update (not propagated)
   std::uint32_t f = anchor.flags;
   if (state->time - anchor.state.time > config_.drivers.lidar.lost_after_s) f |= pose::kLidarLost;
-  ev.message.flags = with_ok(f | live_flags());
+  ev.message.flags = with_ok(f | live_flags(state->time));
   ev.input_steady_ns = item.arrival_steady_ns;
   return true;
 }
@@ -286,7 +292,7 @@ void Pipeline::odometry_thread() {
     ev.message.angular_rate = last_gyro - result->state.gyro_bias;
     ev.message.covariance = pose::pose_covariance_from_state(result->covariance);
     const std::uint32_t scan_flags = status_flags(result->status);
-    std::uint32_t f = scan_flags | live_flags();
+    std::uint32_t f = scan_flags | live_flags(result->state.time);
     f &= ~static_cast<std::uint32_t>(pose::kLidarLost);  // this pose comes from a scan
     ev.message.flags = with_ok(f);
     auto& d = ev.diagnostics;

@@ -96,7 +96,8 @@ void LidarOutput::track_time(std::int64_t header_ns, std::int64_t arrival_ns) {
   if (bridge_->steps() != before) {
     steps_.store(bridge_->steps(), std::memory_order_relaxed);
     step_correction_.store(bridge_->correction_ns(), std::memory_order_relaxed);
-    last_step_.store(packet_steady_, std::memory_order_relaxed);
+    last_step_time_.store(static_cast<double>(header_ns + shift_ns_) * 1e-9 + config_.extrinsics.lidar_time_offset_s,
+                          std::memory_order_relaxed);
     spdlog::warn("LiDAR time stepped by {:.6f} s against the arrival clock; taken out to keep scan times continuous "
                  "(total correction {:.6f} s until restart)",
                  static_cast<double>(bridge_->last_step_ns()) * 1e-9, static_cast<double>(bridge_->correction_ns()) * 1e-9);
@@ -158,7 +159,7 @@ void ImuOutput::sample(const ImuSample& delivered) {
     if (bridge_->steps() != before) {
       steps_.store(bridge_->steps(), std::memory_order_relaxed);
       step_correction_.store(bridge_->correction_ns(), std::memory_order_relaxed);
-      last_step_.store(now, std::memory_order_relaxed);
+      last_step_time_.store(s.time, std::memory_order_relaxed);
       spdlog::warn("IMU time stepped by {:.6f} s against the arrival clock; taken out to keep it continuous "
                    "(total correction {:.6f} s until restart)",
                    static_cast<double>(bridge_->last_step_ns()) * 1e-9, static_cast<double>(bridge_->correction_ns()) * 1e-9);

@@ -8,6 +8,7 @@
 #include <mutex>
 #include <vector>
 
+#include "liod/daemon/logging.hpp"
 #include "liod/daemon/pipeline.hpp"
 #include "liod/daemon/sources.hpp"
 #include "liod/drivers/byte_order.hpp"
@@ -21,6 +22,15 @@ using namespace liod::test;
 namespace {
 
 constexpr std::int64_t kSecond = 1000000000;
+
+#if defined(__SANITIZE_THREAD__)
+// Under ThreadSanitizer the odometry runs about a hundred times slower than the data: its poses
+// come seconds late, the IMU ring overflows and IMU-rate poses dead-reckon from stale scan
+// updates. What is checked there is the threads' interplay, the detection and the flags.
+constexpr bool kOdometryKeepsUp = false;
+#else
+constexpr bool kOdometryKeepsUp = true;
+#endif
 
 /// The drive's pcap at its pace, MSOP header times moved by `step_ns` from data time `at_ns` on.
 class SteppedPcapSource : public LidarSource {
@@ -98,6 +108,9 @@ TEST(ClockJump, LidarAndImuStepsAreTakenOutAndFlagged) {
   LIOD_REQUIRE_SIM_DRIVE(drive);
   const auto ref = read_tum(reference_replay(*drive) / "scan.tum");
   ASSERT_GT(ref.size(), 50U);
+  // As `liod run` does before any thread starts: the driver threads log the steps, and spdlog's
+  // registry (in an uninstrumented library) would otherwise be created by whichever logs first.
+  setup_logging("warn");
   Config config = drive_config(*drive);
   config.time.lidar_clock = LidarClock::kSensor;
   config.time.imu_wait_s = 2.0;  // on a loaded machine the IMU may lag: the comparison needs it there
@@ -136,12 +149,13 @@ TEST(ClockJump, LidarAndImuStepsAreTakenOutAndFlagged) {
   EXPECT_NE(health.find("\"imu_step_correction_s\":1.500"), std::string::npos) << health;
 
   // Scan poses: on the undisturbed timeline and trajectory. The step cuts one sweep in two, so
-  // there may be a scan more than in the reference.
-  ASSERT_GE(got.scans.size(), ref.size() - 1);
-  ASSERT_LE(got.scans.size(), ref.size() + 2);
+  // there may be a scan more than in the reference. Flagged from the step's data time on.
+  ASSERT_FALSE(got.scans.empty());
   std::size_t on_reference_time = 0, flagged_after = 0, flagged_before = 0;
   for (const auto& p : got.scans) {
-    EXPECT_LT((p.position - reference_at(ref, p.time)).norm(), 0.3) << "scan pose at " << p.time;
+    if (kOdometryKeepsUp) {
+      EXPECT_LT((p.position - reference_at(ref, p.time)).norm(), 0.3) << "scan pose at " << p.time;
+    }
     // Within 10 µs: across the step the packets are taken to keep their spacing, which the
     // header's whole microseconds give to ±1 µs.
     for (const auto& r : ref) on_reference_time += std::abs(r.t - p.time) < 1e-5 ? 1 : 0;
@@ -149,7 +163,11 @@ TEST(ClockJump, LidarAndImuStepsAreTakenOutAndFlagged) {
     if (p.time > lidar_step_time + 0.2) flagged_after += flagged ? 1 : 0;
     if (p.time < lidar_step_time - 0.2) flagged_before += flagged ? 1 : 0;
   }
-  EXPECT_GE(on_reference_time, ref.size() - 3);  // every scan but those the step cut ends on time
+  if (kOdometryKeepsUp) {
+    EXPECT_GE(got.scans.size(), ref.size() - 1);
+    EXPECT_LE(got.scans.size(), ref.size() + 2);
+    EXPECT_GE(on_reference_time, ref.size() - 3);  // every scan but those the step cut ends on time
+  }
   EXPECT_EQ(flagged_before, 0U);
   EXPECT_GT(flagged_after, 0U);
   // The flag outlives the last step by time.jump_flag_s (10 s): every pose after the first is flagged.
@@ -160,9 +178,9 @@ TEST(ClockJump, LidarAndImuStepsAreTakenOutAndFlagged) {
   // dead reckoning at zero speed before it jumps to the registered pose).
   ASSERT_GT(got.imu.size(), 1000U);
   for (std::size_t k = 1; k < got.imu.size(); ++k) {
-    if (got.imu[k].time < got.scans.front().time + 2.0) continue;
     ASSERT_GT(got.imu[k].time, got.imu[k - 1].time) << "IMU pose " << k;
-    ASSERT_LT((got.imu[k].position - got.imu[k - 1].position).norm(), 0.3) << "IMU pose " << k << " at " << got.imu[k].time;
     ASSERT_LT(got.imu[k].time - got.imu[k - 1].time, 0.05) << "IMU pose " << k;
+    if (!kOdometryKeepsUp || got.imu[k].time < got.scans.front().time + 2.0) continue;
+    ASSERT_LT((got.imu[k].position - got.imu[k - 1].position).norm(), 0.3) << "IMU pose " << k << " at " << got.imu[k].time;
   }
 }

@@ -182,8 +182,9 @@ class Pipeline {
   void apply_thread_config(const ThreadConfig& tc, const char* name);
   void fail(const std::string& what);
   void push_pose(PoseEvent& ev);
-  /// Host-time health flags (live ordering only: replay must not depend on thread timing).
-  std::uint32_t live_flags() const;
+  /// Flags from host-time health and clock steps for a pose at `pose_time` (live ordering only:
+  /// replay must not depend on thread timing).
+  std::uint32_t live_flags(double pose_time) const;
   /// Propagates `item` from the latest anchor into an IMU-rate pose; false before the first anchor.
   bool make_imu_pose(const ImuItem& item, PoseEvent& ev);
   /// Live: the IMU thread's IMU-rate pose for each sample.

@@ -63,10 +63,10 @@ class LidarOutput {
   bool sensor_synced() const noexcept { return synced_.load(std::memory_order_relaxed); }
   std::uint64_t clock_jumps() const noexcept { return jumps_.load(std::memory_order_relaxed); }
   /// Steps of the LiDAR's time taken out (live only; see drivers::ClockStepBridge), the total
-  /// correction, and when the last one was seen (steady clock, 0 = never).
+  /// correction, and where the last one was on the pipeline's (IMU) timeline (+inf = never).
   std::uint64_t clock_steps() const noexcept { return steps_.load(std::memory_order_relaxed); }
   std::int64_t step_correction_ns() const noexcept { return step_correction_.load(std::memory_order_relaxed); }
-  std::int64_t last_step_steady_ns() const noexcept { return last_step_.load(std::memory_order_relaxed); }
+  double last_step_time() const noexcept { return last_step_time_.load(std::memory_order_relaxed); }
 
   /// Called with every datagram before decoding (liod record).
   std::function<void(std::span<const std::uint8_t>, std::int64_t, std::uint16_t)> tap;
@@ -94,7 +94,8 @@ class LidarOutput {
   drivers::HeliosStats stats_copy_;
   std::atomic<std::int64_t> heartbeat_{0};
   std::atomic<std::uint64_t> packets_{0}, lost_{0}, sweeps_{0}, jumps_{0}, steps_{0};
-  std::atomic<std::int64_t> last_sweep_{0}, step_correction_{0}, last_step_{0};
+  std::atomic<std::int64_t> last_sweep_{0}, step_correction_{0};
+  std::atomic<double> last_step_time_{std::numeric_limits<double>::infinity()};
   std::atomic<std::int64_t> offset_used_{0};
   std::atomic<bool> synced_{false};
 };
@@ -115,7 +116,7 @@ class ImuOutput {
   std::uint64_t out_of_order() const noexcept { return out_of_order_.load(std::memory_order_relaxed); }
   std::uint64_t clock_steps() const noexcept { return steps_.load(std::memory_order_relaxed); }
   std::int64_t step_correction_ns() const noexcept { return step_correction_.load(std::memory_order_relaxed); }
-  std::int64_t last_step_steady_ns() const noexcept { return last_step_.load(std::memory_order_relaxed); }
+  double last_step_time() const noexcept { return last_step_time_.load(std::memory_order_relaxed); }
   /// Host-clock correction from PPS (added to host-stamped samples by the transports).
   std::atomic<std::int64_t> pps_correction_ns{0};
   /// Called with every sample as the transport delivered it (liod record).
@@ -134,7 +135,8 @@ class ImuOutput {
   ImuItem item_;
   std::atomic<std::int64_t> heartbeat_{0};
   std::atomic<std::uint64_t> samples_{0}, steps_{0}, out_of_order_{0};
-  std::atomic<std::int64_t> last_{0}, step_correction_{0}, last_step_{0};
+  std::atomic<std::int64_t> last_{0}, step_correction_{0};
+  std::atomic<double> last_step_time_{std::numeric_limits<double>::infinity()};
 };
 
 }  // namespace liod
