@@ -79,9 +79,10 @@ Pipeline::Pipeline(const Config& config, PipelineOptions options)
       imu_pose_ring_(static_cast<std::size_t>(config.threads.pose_ring), &publisher_wakeup_),
       keyframe_ring_(static_cast<std::size_t>(config.threads.keyframe_ring), &backend_wakeup_) {
   const bool lossless = options_.ordering == Ordering::Lockstep;
-  lidar_out_ = std::make_unique<LidarOutput>(config_, scan_ring_, lossless, source_stop_);
+  const bool bridge = options_.bridge_clock_steps && !lossless;  // lockstep has no arrival clock
+  lidar_out_ = std::make_unique<LidarOutput>(config_, scan_ring_, lossless, bridge, source_stop_);
   imu_out_ = std::make_unique<ImuOutput>(imu_ring_, lossless, source_stop_,
-                                         static_cast<std::int64_t>(config_.time.jump_threshold_s * 1e9));
+                                         bridge ? static_cast<std::int64_t>(config_.time.jump_threshold_s * 1e9) : 0);
   if (!lossless && options_.imu_rate_poses) imu_out_->on_sample = [this](const ImuItem& item) { publish_imu_pose(item); };
   if (config_.backend.enabled) backend_ = std::make_unique<BackendWorker>(config_);
 }

@@ -157,6 +157,7 @@ int run_daemon(const Config& config, const RunOptions& options) {
   po.ordering = Ordering::Arrival;
   po.imu_rate_poses = config.pose_socket.imu_rate;
   po.pose_socket = config.output.pose_socket;
+  po.bridge_clock_steps = true;
   Pipeline pipeline(config, po);
   if (recorder) {
     Recorder* r = recorder.get();

@@ -28,12 +28,12 @@ std::int64_t steady_ns() noexcept {
 }
 
 // ---- LidarOutput -------------------------------------------------------------------------------
-LidarOutput::LidarOutput(const Config& config, drivers::SpscRing<ScanItem>& ring, bool lossless,
+LidarOutput::LidarOutput(const Config& config, drivers::SpscRing<ScanItem>& ring, bool lossless, bool bridge_clock_steps,
                          const std::atomic<bool>& stop)
     : config_(config), ring_(ring), lossless_(lossless), stop_(stop),
       offset_(static_cast<std::int64_t>(config.time.offset_window_s * 1e9),
               static_cast<std::int64_t>(config.time.jump_threshold_s * 1e9)) {
-  if (!lossless) bridge_.emplace(static_cast<std::int64_t>(config.time.jump_threshold_s * 1e9));
+  if (bridge_clock_steps) bridge_.emplace(static_cast<std::int64_t>(config.time.jump_threshold_s * 1e9));
   decoder_ = std::make_unique<drivers::RsHeliosDecoder>(helios_options(config),
                                                         [this](Scan& scan, const drivers::SweepInfo&) { on_sweep(scan); });
   heartbeat();
@@ -142,7 +142,7 @@ drivers::HeliosStats LidarOutput::decoder_stats() const {
 ImuOutput::ImuOutput(drivers::SpscRing<ImuItem>& ring, bool lossless, const std::atomic<bool>& stop,
                      std::int64_t step_threshold_ns)
     : ring_(ring), lossless_(lossless), stop_(stop) {
-  if (!lossless) bridge_.emplace(step_threshold_ns);
+  if (step_threshold_ns > 0) bridge_.emplace(step_threshold_ns);
 }
 
 void ImuOutput::sample(const ImuSample& delivered) {

@@ -80,6 +80,7 @@ int main(int argc, char** argv) {
   PipelineOptions po;
   po.ordering = Ordering::Arrival;
   po.pose_socket = config.output.pose_socket;
+  po.bridge_clock_steps = true;  // as liod run
   Pipeline pipeline(config, po);
   std::vector<double> front_end_ms, map_ms;  // the odometry's own split of its time (publisher thread)
   pipeline.add_sink([&](const PoseEvent& ev) {

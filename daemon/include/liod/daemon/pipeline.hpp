@@ -117,6 +117,9 @@ struct PipelineOptions {
   bool imu_rate_poses = true;     ///< compute and publish IMU-rate poses
   std::string pose_socket;        ///< "" = no socket
   bool realtime_threads = true;   ///< apply threads.* priorities/affinity
+  /// Live sources (Arrival ordering): take steps of the LiDAR's and the IMU's time out
+  /// (drivers::ClockStepBridge). Not for file replays: they play a recording as it is.
+  bool bridge_clock_steps = false;
 };
 
 /// Totals for the replay summary (valid after join()).

@@ -42,7 +42,9 @@ struct ImuItem {
 /// What the LiDAR driver thread does with each UDP payload, whichever the source.
 class LidarOutput {
  public:
-  LidarOutput(const Config& config, drivers::SpscRing<ScanItem>& ring, bool lossless, const std::atomic<bool>& stop);
+  /// `bridge_clock_steps`: take steps of the header time out (live; see drivers::ClockStepBridge).
+  LidarOutput(const Config& config, drivers::SpscRing<ScanItem>& ring, bool lossless, bool bridge_clock_steps,
+              const std::atomic<bool>& stop);
   /// One datagram. `arrival_realtime_ns`: kernel receive time (live) or capture time (file);
   /// `queued_ns`: how long it waited in the socket before this thread took it (live, else 0).
   void packet(std::span<const std::uint8_t> payload, std::int64_t arrival_realtime_ns, std::uint16_t dst_port,
@@ -84,7 +86,7 @@ class LidarOutput {
   bool lossless_;
   const std::atomic<bool>& stop_;
   drivers::OffsetTracker offset_;
-  std::optional<drivers::ClockStepBridge> bridge_;  // live ordering only: replay has no arrival clock
+  std::optional<drivers::ClockStepBridge> bridge_;
   std::int64_t shift_ns_ = 0;  // offset + step correction as of the last packet: added to a sweep it ended
   std::unique_ptr<drivers::RsHeliosDecoder> decoder_;
   ScanItem item_;
@@ -103,8 +105,8 @@ class LidarOutput {
 /// What the IMU driver thread does with each sample, whichever the transport.
 class ImuOutput {
  public:
-  /// Without `lossless` (live ordering) steps of the sample times beyond `step_threshold_ns` are
-  /// taken out (drivers::ClockStepBridge).
+  /// A `step_threshold_ns` > 0 takes steps of the sample times beyond it out (live; see
+  /// drivers::ClockStepBridge).
   ImuOutput(drivers::SpscRing<ImuItem>& ring, bool lossless, const std::atomic<bool>& stop, std::int64_t step_threshold_ns);
   void sample(const ImuSample& s);
   void finish() { ring_.close(); }
