@@ -15,11 +15,12 @@ cmake --build build-asan -j"$jobs" --target "${sanitized[@]}"
 (cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
    ctest --output-on-failure -j"$jobs" -L "$(IFS='|'; echo "${sanitized[*]}")")
 
-# ThreadSanitizer: the daemon's rings, pose socket and pipeline threads.
+# ThreadSanitizer: the daemon's rings, pose socket and pipeline threads (ClockJump: the live
+# pipeline with IMU-rate poses made on the IMU thread).
 cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIOD_SANITIZE=thread >/dev/null
-cmake --build build-tsan -j"$jobs" --target test_daemon
+cmake --build build-tsan -j"$jobs" --target test_daemon liod-sim  # liod-sim: the drive the pipeline tests use
 (cd build-tsan && TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
-   ctest --output-on-failure -j"$jobs" -L test_daemon -R 'SpscRing|PoseSocket|PoseProtocol|StuckClient|UdpLidar|SerialImu')
+   ctest --output-on-failure -j"$jobs" -L test_daemon -R 'SpscRing|PoseSocket|PoseProtocol|StuckClient|UdpLidar|SerialImu|AnchorExchange|ClockJump')
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$jobs"

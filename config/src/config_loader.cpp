@@ -210,6 +210,7 @@ Schema declare_schema(Config& c) {
   s.real("lidar.min_range_m", &c.lidar.min_range_m, 0.0, 10.0);
   s.real("lidar.max_range_m", &c.lidar.max_range_m, 1.0, 500.0);
   s.real("lidar.split_azimuth_deg", &c.lidar.split_azimuth_deg, 0.0, 359.99);
+  s.integer("lidar.packets_before_difop", &c.lidar.packets_before_difop, 0, 65536);
 
   s.real("imu.rate_hz", &c.imu.rate_hz, 10.0, 10000.0);
   s.real("imu.gyro_noise_density", &c.imu.gyro_noise_density, 1e-7, 1.0);
@@ -314,6 +315,7 @@ Schema declare_schema(Config& c) {
            {{"auto", LidarClock::kAuto}, {"sensor", LidarClock::kSensor}, {"host", LidarClock::kHost}});
   s.real("time.offset_window_s", &c.time.offset_window_s, 0.1, 600.0);
   s.real("time.jump_threshold_s", &c.time.jump_threshold_s, 0.001, 3600.0);
+  s.real("time.jump_flag_s", &c.time.jump_flag_s, 0.0, 3600.0);
   s.real("time.imu_wait_s", &c.time.imu_wait_s, 0.0, 5.0);
   s.text("time.pps_chip", &c.time.pps_chip);
   s.integer("time.pps_line", &c.time.pps_line, 0, 1023);

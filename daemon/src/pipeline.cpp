@@ -10,24 +10,12 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
-#include <limits>
 #include <sstream>
 
 #include "liod/daemon/pose_server.hpp"
-#include "liod/drivers/byte_order.hpp"
 
 namespace liod {
 namespace {
-
-drivers::HeliosOptions helios_options(const Config& config) {
-  drivers::HeliosOptions o;
-  o.model = config.lidar.model == LidarModel::kHelios16P ? drivers::HeliosModel::Helios16P : drivers::HeliosModel::Helios5515;
-  if (!config.lidar.angles_csv.empty()) o.angles = drivers::load_angles_csv(config.lidar.angles_csv);
-  o.msop.min_range_m = static_cast<float>(config.lidar.min_range_m);
-  o.msop.max_range_m = static_cast<float>(config.lidar.max_range_m);
-  o.split_azimuth_deg = config.lidar.split_azimuth_deg;
-  return o;
-}
 
 std::uint32_t status_flags(std::uint32_t odometry_status) {
   std::uint32_t f = 0;
@@ -52,10 +40,6 @@ void fill_state(pose::PoseMessage& m, const NavState& s) {
 }
 
 }  // namespace
-
-std::int64_t steady_ns() noexcept {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 // ---- LatencyStats ----------------------------------------------------------------------------
 void LatencyStats::add(double us) {
@@ -86,112 +70,20 @@ LatencyStats::Summary LatencyStats::summary() const {
   return s;
 }
 
-// ---- LidarOutput -------------------------------------------------------------------------------
-LidarOutput::LidarOutput(const Config& config, drivers::SpscRing<ScanItem>& ring, bool lossless,
-                         const std::atomic<bool>& stop)
-    : config_(config), ring_(ring), lossless_(lossless), stop_(stop),
-      offset_(static_cast<std::int64_t>(config.time.offset_window_s * 1e9),
-              static_cast<std::int64_t>(config.time.jump_threshold_s * 1e9)) {
-  decoder_ = std::make_unique<drivers::RsHeliosDecoder>(helios_options(config),
-                                                        [this](Scan& scan, const drivers::SweepInfo&) { on_sweep(scan); });
-  heartbeat();
-}
-
-void LidarOutput::packet(std::span<const std::uint8_t> payload, std::int64_t arrival_ns, std::uint16_t dst_port) {
-  packet_steady_ = steady_ns();
-  heartbeat_.store(packet_steady_, std::memory_order_relaxed);
-  packets_.fetch_add(1, std::memory_order_relaxed);
-  if (tap) tap(payload, arrival_ns, dst_port);
-  // MSOP header time (spec §3: 6-byte BE seconds + 4-byte BE µs at offset 20) against arrival.
-  if (payload.size() == 1248 && payload[0] == 0x55 && payload[1] == 0xAA && payload[2] == 0x05 && payload[3] == 0x5A) {
-    const std::uint64_t sec = drivers::load_be48(&payload[20]);
-    const std::uint32_t usec = drivers::load_be32(&payload[26]);
-    if (usec < 1000000 && sec < 4000000000ULL) {
-      offset_.add(arrival_ns, static_cast<std::int64_t>(sec) * 1000000000 + static_cast<std::int64_t>(usec) * 1000);
-      jumps_.store(offset_.jumps(), std::memory_order_relaxed);
-    }
-  }
-  decoder_->feed(payload, arrival_ns);
-  const auto s = decoder_->stats();
-  lost_.store(s.lost_packets, std::memory_order_relaxed);
-  std::lock_guard lock(stats_mutex_);
-  stats_copy_ = s;
-}
-
-void LidarOutput::on_sweep(Scan& scan) {
-  const auto& difop = decoder_->last_difop();
-  const bool synced = difop.has_value() && difop->time_sync_status != 0;
-  synced_.store(synced, std::memory_order_relaxed);
-  std::int64_t offset = 0;
-  switch (config_.time.lidar_clock) {
-    case LidarClock::kSensor:
-      break;
-    case LidarClock::kHost:
-      offset = offset_.offset_ns();
-      break;
-    case LidarClock::kAuto: {
-      // The sensor's time when it says it is synced; before its first DIFOP, when it agrees with
-      // the host anyway (both synced, or a recording whose capture times are the header times).
-      const bool agrees = std::llabs(offset_.offset_ns()) < static_cast<std::int64_t>(config_.time.jump_threshold_s * 1e9);
-      const bool use_sensor = difop.has_value() ? synced : agrees;
-      offset = use_sensor ? 0 : offset_.offset_ns();
-      break;
-    }
-  }
-  offset_used_.store(offset, std::memory_order_relaxed);
-  if (offset != 0) {
-    const double o = static_cast<double>(offset) * 1e-9;
-    scan.start_time += o;
-    scan.end_time += o;
-  }
-  using std::swap;
-  swap(item_.scan, scan);
-  item_.ready_steady_ns = packet_steady_;
-  sweeps_.fetch_add(1, std::memory_order_relaxed);
-  last_sweep_.store(packet_steady_, std::memory_order_relaxed);
-  // Exchange with the ring: item_ comes back with a recycled buffer, handed back to the decoder.
-  if (lossless_) ring_.push_wait(item_, stop_);
-  else ring_.try_push(item_);
-  swap(item_.scan, scan);
-}
-
-void LidarOutput::finish() {
-  decoder_->flush();
-  {
-    std::lock_guard lock(stats_mutex_);
-    stats_copy_ = decoder_->stats();
-  }
-  ring_.close();
-}
-
-drivers::HeliosStats LidarOutput::decoder_stats() const {
-  std::lock_guard lock(stats_mutex_);
-  return stats_copy_;
-}
-
-// ---- ImuOutput ---------------------------------------------------------------------------------
-void ImuOutput::sample(const ImuSample& s) {
-  const std::int64_t now = steady_ns();
-  heartbeat_.store(now, std::memory_order_relaxed);
-  if (tap) tap(s);
-  item_.sample = s;
-  item_.arrival_steady_ns = now;
-  if (lossless_) ring_.push_wait(item_, stop_);
-  else ring_.try_push(item_);
-  samples_.fetch_add(1, std::memory_order_relaxed);
-  last_.store(now, std::memory_order_relaxed);
-}
-
 // ---- Pipeline ----------------------------------------------------------------------------------
 Pipeline::Pipeline(const Config& config, PipelineOptions options)
     : config_(config), options_(std::move(options)),
       scan_ring_(static_cast<std::size_t>(config.threads.scan_ring), &odometry_wakeup_),
       imu_ring_(static_cast<std::size_t>(config.threads.imu_ring), &odometry_wakeup_),
       pose_ring_(static_cast<std::size_t>(config.threads.pose_ring), &publisher_wakeup_),
+      imu_pose_ring_(static_cast<std::size_t>(config.threads.pose_ring), &publisher_wakeup_),
       keyframe_ring_(static_cast<std::size_t>(config.threads.keyframe_ring), &backend_wakeup_) {
   const bool lossless = options_.ordering == Ordering::Lockstep;
-  lidar_out_ = std::make_unique<LidarOutput>(config_, scan_ring_, lossless, source_stop_);
-  imu_out_ = std::make_unique<ImuOutput>(imu_ring_, lossless, source_stop_);
+  const bool bridge = options_.bridge_clock_steps && !lossless;  // lockstep has no arrival clock
+  lidar_out_ = std::make_unique<LidarOutput>(config_, scan_ring_, lossless, bridge, source_stop_);
+  imu_out_ = std::make_unique<ImuOutput>(imu_ring_, lossless, source_stop_,
+                                         bridge ? static_cast<std::int64_t>(config_.time.jump_threshold_s * 1e9) : 0);
+  if (!lossless && options_.imu_rate_poses) imu_out_->on_sample = [this](const ImuItem& item) { publish_imu_pose(item); };
   if (config_.backend.enabled) backend_ = std::make_unique<BackendWorker>(config_);
 }
 
@@ -294,15 +186,65 @@ void Pipeline::lidar_thread(LidarSource& source) {
 
 void Pipeline::imu_thread(ImuSource* source) {
   apply_thread_config(config_.threads.imu, "liod-imu");
+  auto finish = [this] {
+    imu_out_->finish();
+    imu_pose_ring_.close();
+  };
   if (source != nullptr) {
     try {
       source->run(*imu_out_, source_stop_);
     } catch (...) {
-      imu_out_->finish();
+      finish();
       throw;
     }
   }
-  imu_out_->finish();
+  finish();
+}
+
+std::uint32_t Pipeline::live_flags(double pose_time) const {
+  if (options_.ordering == Ordering::Lockstep) return 0;
+  const std::int64_t now = steady_ns();
+  const auto imu_lost_ns = static_cast<std::int64_t>(config_.drivers.imu.lost_after_s * 1e9);
+  const auto lidar_lost_ns = static_cast<std::int64_t>(config_.drivers.lidar.lost_after_s * 1e9);
+  std::uint32_t f = 0;
+  if (imu_source_ != nullptr && now - imu_out_->last_sample_steady_ns() > imu_lost_ns) f |= pose::kImuLost;
+  if (now - lidar_out_->last_sweep_steady_ns() > lidar_lost_ns) f |= pose::kLidarLost;
+  // A sensor's step is placed on the data timeline (a pose processed late is flagged by when its
+  // data was taken); the host clock's by when it was seen.
+  const double flag_s = config_.time.jump_flag_s;
+  auto after_step = [&](double step_time) { return step_time <= pose_time && pose_time < step_time + flag_s; };
+  const std::int64_t host_jump = host_jump_steady_ns_.load(std::memory_order_relaxed);
+  if (after_step(lidar_out_->last_step_time()) || after_step(imu_out_->last_step_time()) ||
+      (host_jump != 0 && now - host_jump < static_cast<std::int64_t>(flag_s * 1e9))) {
+    f |= pose::kClockJump;
+  }
+  return f;
+}
+
+void Pipeline::note_host_clock_jump() noexcept {
+  host_jumps_.fetch_add(1, std::memory_order_relaxed);
+  host_jump_steady_ns_.store(steady_ns(), std::memory_order_relaxed);
+}
+
+bool Pipeline::make_imu_pose(const ImuItem& item, PoseEvent& ev) {
+  const auto state = propagator_.add(item.sample);
+  if (!state) return false;
+  const ScanAnchor& anchor = *propagator_.anchor();
+  ev.message.type = pose::MessageType::ImuPose;
+  fill_state(ev.message, *state);
+  ev.message.angular_rate = item.sample.gyro - state->gyro_bias;
+  ev.message.covariance = anchor.pose_covariance;  // of the last scan update (not propagated)
+  std::uint32_t f = anchor.flags;
+  if (state->time - anchor.state.time > config_.drivers.lidar.lost_after_s) f |= pose::kLidarLost;
+  ev.message.flags = with_ok(f | live_flags(state->time));
+  ev.input_steady_ns = item.arrival_steady_ns;
+  return true;
+}
+
+void Pipeline::publish_imu_pose(const ImuItem& item) {
+  ScanAnchor anchor;
+  if (anchors_.take(anchor)) propagator_.set_anchor(anchor);
+  if (make_imu_pose(item, imu_event_)) imu_pose_ring_.try_push(imu_event_);
 }
 
 void Pipeline::push_pose(PoseEvent& ev) {
@@ -315,51 +257,26 @@ void Pipeline::odometry_thread() {
   LidarInertialOdometry odometry(config_);
   const bool lockstep = options_.ordering == Ordering::Lockstep;
   const bool imu_poses = options_.imu_rate_poses;
-  const double lidar_lost_s = config_.drivers.lidar.lost_after_s;
   const auto imu_wait_ns = static_cast<std::int64_t>(config_.time.imu_wait_s * 1e9);
-  const auto imu_lost_ns = static_cast<std::int64_t>(config_.drivers.imu.lost_after_s * 1e9);
-  const auto lidar_lost_ns = static_cast<std::int64_t>(lidar_lost_s * 1e9);
-  const bool have_imu_source = imu_source_ != nullptr;
   std::deque<ScanItem> pending;
   ScanItem spare;
   ImuItem held;
   bool have_held = false;
   Eigen::Vector3d last_gyro = Eigen::Vector3d::Zero();
-  double last_scan_end = -std::numeric_limits<double>::infinity();
-  std::uint32_t last_scan_flags = pose::kInitializing;
-  StateCovariance last_covariance = StateCovariance::Zero();
-
-  // Host-time health flags only in live ordering: replay must not depend on thread timing.
-  auto live_flags = [&]() -> std::uint32_t {
-    if (lockstep) return 0;
-    const std::int64_t now = steady_ns();
-    std::uint32_t f = 0;
-    if (have_imu_source && now - imu_out_->last_sample_steady_ns() > imu_lost_ns) f |= pose::kImuLost;
-    if (now - lidar_out_->last_sweep_steady_ns() > lidar_lost_ns) f |= pose::kLidarLost;
-    return f;
-  };
+  PoseEvent imu_event;
 
   auto feed = [&](const ImuItem& item) {
     odometry.add_imu(item.sample);
     ++totals_.imu_fed;
+    odometry_imu_dropped_.store(odometry.dropped_imu_samples(), std::memory_order_relaxed);
     last_gyro = item.sample.gyro;
-    if (!imu_poses) return;
-    const auto state = odometry.propagated_state();
-    if (!state) return;
-    PoseEvent ev;
-    ev.message.type = pose::MessageType::ImuPose;
-    fill_state(ev.message, *state);
-    ev.message.angular_rate = item.sample.gyro - state->gyro_bias;
-    ev.message.covariance = pose::pose_covariance_from_state(last_covariance);  // of the last scan update
-    std::uint32_t f = last_scan_flags & (pose::kDegenerate | pose::kFewFeatures);
-    if (std::isfinite(last_scan_end) && state->time - last_scan_end > lidar_lost_s) f |= pose::kLidarLost;
-    ev.message.flags = with_ok(f | live_flags());
-    ev.input_steady_ns = item.arrival_steady_ns;
-    push_pose(ev);
+    // Live, the IMU thread makes the IMU-rate poses (publish_imu_pose).
+    if (lockstep && imu_poses && make_imu_pose(item, imu_event)) push_pose(imu_event);
   };
 
   auto process = [&](ScanItem& item) {
-    hb_odometry_.store(steady_ns(), std::memory_order_relaxed);
+    const std::int64_t start_ns = steady_ns();
+    hb_odometry_.store(start_ns, std::memory_order_relaxed);
     const auto result = odometry.process(item.scan);
     ++totals_.scans;
     if (!result) return;
@@ -375,9 +292,8 @@ void Pipeline::odometry_thread() {
     fill_state(ev.message, result->state);
     ev.message.angular_rate = last_gyro - result->state.gyro_bias;
     ev.message.covariance = pose::pose_covariance_from_state(result->covariance);
-    last_covariance = result->covariance;
-    last_scan_flags = status_flags(result->status);
-    std::uint32_t f = last_scan_flags | live_flags();
+    const std::uint32_t scan_flags = status_flags(result->status);
+    std::uint32_t f = scan_flags | live_flags(result->state.time);
     f &= ~static_cast<std::uint32_t>(pose::kLidarLost);  // this pose comes from a scan
     ev.message.flags = with_ok(f);
     auto& d = ev.diagnostics;
@@ -394,9 +310,17 @@ void Pipeline::odometry_thread() {
     d.features_ms = result->features_ms;
     d.registration_ms = result->registration_ms;
     d.map_ms = result->map_ms;
-    ev.input_steady_ns = item.ready_steady_ns;
-    last_scan_end = result->state.time;
+    ev.input_steady_ns = item.ready_steady_ns - item.queued_ns;
+    ev.queued_ns = item.queued_ns;
+    ev.process_start_ns = start_ns;
+    ev.process_end_ns = steady_ns();
     push_pose(ev);
+    if (imu_poses) {
+      const ScanAnchor anchor{result->state, odometry.gravity(), ev.message.covariance,
+                              scan_flags & (pose::kDegenerate | pose::kFewFeatures)};
+      if (lockstep) propagator_.set_anchor(anchor);
+      else anchors_.publish(anchor);
+    }
     if ((result->status & kStatusKeyframe) && !odometry.keyframes().empty()) {
       KeyframeEvent k{std::make_shared<const Keyframe>(odometry.keyframes().back()), result->covariance};
       if (lockstep) keyframe_ring_.push_wait(k, stop_);
@@ -482,12 +406,20 @@ void Pipeline::publisher_thread(PoseServer* server) {
     ::poll(fds.data(), fds.size(), 50);
     if ((fds[0].revents & POLLIN) != 0) publisher_wakeup_.clear();
     if (server != nullptr) server->handle(fds, 1);
-    while (pose_ring_.try_pop(ev)) {
+    // Scan poses first: each ring is in order, and neither may wait for the other.
+    while (pose_ring_.try_pop(ev) || imu_pose_ring_.try_pop(ev)) {
       for (const auto& sink : sinks_) sink(ev);
       const bool scan = ev.message.type == pose::MessageType::ScanPose;
       if (server != nullptr) server->broadcast(ev.message);
       if (ev.input_steady_ns > 0) {
-        (scan ? scan_latency_ : imu_latency_).add(static_cast<double>(steady_ns() - ev.input_steady_ns) * 1e-3);
+        const std::int64_t written = steady_ns();
+        (scan ? scan_latency_ : imu_latency_).add(static_cast<double>(written - ev.input_steady_ns) * 1e-3);
+        if (scan) {
+          scan_receive_.add(static_cast<double>(ev.queued_ns) * 1e-3);
+          scan_wait_.add(static_cast<double>(ev.process_start_ns - ev.input_steady_ns - ev.queued_ns) * 1e-3);
+          scan_process_.add(static_cast<double>(ev.process_end_ns - ev.process_start_ns) * 1e-3);
+          scan_publish_.add(static_cast<double>(written - ev.process_end_ns) * 1e-3);
+        }
       }
     }
     const auto now = std::chrono::steady_clock::now();
@@ -503,7 +435,7 @@ void Pipeline::publisher_thread(PoseServer* server) {
       server->broadcast_health(health_json(rates));
       next_health = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(health_period);
     }
-    if (pose_ring_.drained()) break;
+    if (pose_ring_.drained() && imu_pose_ring_.drained()) break;
   }
 }
 
@@ -560,14 +492,24 @@ std::string Pipeline::health_json(HealthRates& rates) const {
   auto ring = [&](const char* name, auto& r) {
     j << '"' << name << "\":{\"fill\":" << r.size() << ",\"capacity\":" << r.capacity() << ",\"drops\":" << r.drops() << '}';
   };
-  const auto sl = scan_latency_.summary();
-  const auto il = imu_latency_.summary();
+  auto latency = [&](const char* name, const LatencyStats& stats) {
+    const auto l = stats.summary();
+    j << '"' << name << "\":{\"median\":" << l.median_us << ",\"p99\":" << l.p99_us << ",\"max\":" << l.max_us << '}';
+  };
   j << "{\"version\":1,\"lidar\":{\"packets\":" << packets << ",\"packet_rate_hz\":" << rate(packets, rates.packets)
     << ",\"sweeps\":" << lidar_out_->sweeps() << ",\"lost_packets\":" << hs.lost_packets << ",\"rejected_packets\":"
-    << hs.rejected() << ",\"clock_offset_s\":" << static_cast<double>(lidar_out_->clock_offset_ns()) * 1e-9
+    << hs.rejected() << ",\"transport_lost\":" << lidar_out_->transport.lost.load() << ",\"transport_refused\":"
+    << lidar_out_->transport.refused.load() << ",\"held_before_difop\":" << hs.held_for_calibration << ",\"clock_offset_s\":" << static_cast<double>(lidar_out_->clock_offset_ns()) * 1e-9
     << ",\"sensor_synced\":" << (lidar_out_->sensor_synced() ? "true" : "false") << ",\"clock_jumps\":"
-    << lidar_out_->clock_jumps() << "},\"imu\":{\"samples\":" << imu << ",\"rate_hz\":" << rate(imu, rates.imu)
-    << ",\"pps_correction_s\":" << static_cast<double>(imu_out_->pps_correction_ns.load()) * 1e-9
+    << lidar_out_->clock_jumps() << "},\"time\":{\"host_clock_jumps\":" << host_jumps_.load()
+    << ",\"lidar_steps\":" << lidar_out_->clock_steps()
+    << ",\"lidar_step_correction_s\":" << static_cast<double>(lidar_out_->step_correction_ns()) * 1e-9
+    << ",\"imu_steps\":" << imu_out_->clock_steps()
+    << ",\"imu_step_correction_s\":" << static_cast<double>(imu_out_->step_correction_ns()) * 1e-9
+    << "},\"imu\":{\"samples\":" << imu << ",\"rate_hz\":" << rate(imu, rates.imu)
+    << ",\"transport_lost\":" << imu_out_->transport.lost.load() << ",\"transport_refused\":"
+    << imu_out_->transport.refused.load() << ",\"out_of_order\":" << imu_out_->out_of_order()
+    << ",\"odometry_dropped\":" << odometry_imu_dropped_.load() << ",\"pps_correction_s\":" << static_cast<double>(imu_out_->pps_correction_ns.load()) * 1e-9
     << "},\"odometry\":{\"scans\":" << scans << ",\"scan_rate_hz\":" << rate(scans, rates.scans)
     << ",\"last_process_ms\":" << last_process_ms_.load() << "},\"rings\":{";
   ring("scan", scan_ring_);
@@ -576,10 +518,22 @@ std::string Pipeline::health_json(HealthRates& rates) const {
   j << ',';
   ring("pose", pose_ring_);
   j << ',';
+  ring("imu_pose", imu_pose_ring_);
+  j << ',';
   ring("keyframe", keyframe_ring_);
-  j << "},\"latency_us\":{\"scan_to_socket\":{\"median\":" << sl.median_us << ",\"p99\":" << sl.p99_us
-    << ",\"max\":" << sl.max_us << "},\"imu_to_socket\":{\"median\":" << il.median_us << ",\"p99\":" << il.p99_us
-    << ",\"max\":" << il.max_us << "}},\"socket\":{\"clients\":" << socket_clients_.load() << ",\"skipped_messages\":"
+  j << "},\"latency_us\":{";
+  latency("scan_to_socket", scan_latency_);
+  j << ',';
+  latency("scan_receive", scan_receive_);
+  j << ',';
+  latency("scan_wait", scan_wait_);
+  j << ',';
+  latency("scan_process", scan_process_);
+  j << ',';
+  latency("scan_publish", scan_publish_);
+  j << ',';
+  latency("imu_to_socket", imu_latency_);
+  j << "},\"socket\":{\"clients\":" << socket_clients_.load() << ",\"skipped_messages\":"
     << socket_skipped_.load() << ",\"dropped_clients\":" << socket_dropped_.load()
     << "},\"backend\":{\"keyframes\":" << backend_keyframes_.load() << "}}";
   rates.time = now;

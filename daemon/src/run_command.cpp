@@ -157,6 +157,7 @@ int run_daemon(const Config& config, const RunOptions& options) {
   po.ordering = Ordering::Arrival;
   po.imu_rate_poses = config.pose_socket.imu_rate;
   po.pose_socket = config.output.pose_socket;
+  po.bridge_clock_steps = true;
   Pipeline pipeline(config, po);
   if (recorder) {
     Recorder* r = recorder.get();
@@ -203,8 +204,10 @@ int run_daemon(const Config& config, const RunOptions& options) {
     if (options.max_seconds > 0 && std::chrono::steady_clock::now() >= deadline) break;
     if (pps) pipeline.imu_output().pps_correction_ns.store(pps->correction_ns());
     if (const auto step = jumps.check(); step != 0) {
-      spdlog::warn("host clock jumped by {:.3f} s (CLOCK_REALTIME step); LiDAR offset tracking restarts on its own",
-                   static_cast<double>(step) * 1e-9);
+      spdlog::warn("host clock jumped by {:.3f} s (CLOCK_REALTIME step); host-stamped times are kept continuous, poses "
+                   "flagged clock_jump for {} s",
+                   static_cast<double>(step) * 1e-9, config.time.jump_flag_s);
+      pipeline.note_host_clock_jump();
     }
     const auto now = std::chrono::steady_clock::now();
     if (now >= next_ping) {

@@ -14,8 +14,7 @@
 
 namespace liod {
 
-template <typename Heartbeat>
-bool PaceClock::wait_until(std::int64_t data_ns, const std::atomic<bool>& stop, Heartbeat&& heartbeat) const {
+bool PaceClock::wait_until(std::int64_t data_ns, const std::atomic<bool>& stop, const std::function<void()>& heartbeat) const {
   if (pace <= 0.0) return !stop.load(std::memory_order_relaxed);
   const auto due = host_start_steady_ns + static_cast<std::int64_t>(static_cast<double>(data_ns - data_start_ns) / pace);
   for (;;) {
@@ -102,10 +101,19 @@ void UdpLidarSource::run(LidarOutput& out, const std::atomic<bool>& stop) {
   std::uint64_t reported_kernel_drops = 0;
   while (!stop.load(std::memory_order_relaxed)) {
     out.heartbeat();
+    std::int64_t now = 0;  // one clock read per batch: the batch was taken at once
     receiver.poll(50, [&](const drivers::ReceivedDatagram& dg) {
-      out.packet(dg.payload, dg.kernel_time_ns != 0 ? dg.kernel_time_ns : drivers::realtime_ns(), dg.dst_port);
+      if (now == 0) now = drivers::realtime_ns();
+      if (dg.kernel_time_ns == 0) {
+        out.packet(dg.payload, now, dg.dst_port);
+      } else {
+        out.packet(dg.payload, dg.kernel_time_ns, dg.dst_port, std::max<std::int64_t>(0, now - dg.kernel_time_ns));
+      }
     });
-    const auto drops = receiver.stats().kernel_drops;
+    const auto& rs = receiver.stats();
+    out.transport.lost.store(rs.kernel_drops, std::memory_order_relaxed);
+    out.transport.refused.store(rs.filtered_source + rs.truncated, std::memory_order_relaxed);
+    const auto drops = rs.kernel_drops;
     if (drops > reported_kernel_drops) {
       spdlog::warn("LiDAR: the kernel dropped {} datagrams (receive buffer full)", drops - reported_kernel_drops);
       reported_kernel_drops = drops;
@@ -131,7 +139,6 @@ void SerialImuSource::run(ImuOutput& out, const std::atomic<bool>& stop) {
   std::uint32_t last_fine = 0;
   std::int64_t fine_wraps = 0;
   bool have_fine = false;
-  double last_time = -1.0;
   drivers::xsens::MtData2Parser parser([&](const drivers::xsens::MtData2Sample& m) {
     if (!m.rate_of_turn || !m.acceleration) return;
     std::int64_t t = read_time;
@@ -144,8 +151,6 @@ void SerialImuSource::run(ImuOutput& out, const std::atomic<bool>& stop) {
     }
     ImuSample s;
     s.time = static_cast<double>(t + out.pps_correction_ns.load(std::memory_order_relaxed)) * 1e-9;
-    if (s.time <= last_time) return;  // duplicate or a clock step backwards: the odometry needs order
-    last_time = s.time;
     s.gyro = *m.rate_of_turn;
     s.accel = *m.acceleration;
     out.sample(s);
@@ -161,6 +166,8 @@ void SerialImuSource::run(ImuOutput& out, const std::atomic<bool>& stop) {
         if (n == 0) continue;
         read_time = drivers::realtime_ns();
         parser.feed(std::span(buffer.data(), n));
+        out.transport.lost.store(parser.stats().counter_gaps, std::memory_order_relaxed);
+        out.transport.refused.store(parser.stats().bad_checksum + parser.stats().malformed, std::memory_order_relaxed);
       }
     } catch (const std::exception& e) {
       // Unplugged adapter or a device not there yet: retry, never die (the IMU-lost flag and the
@@ -188,7 +195,6 @@ std::string CanImuSource::describe() const {
 void CanImuSource::run(ImuOutput& out, const std::atomic<bool>& stop) {
   const auto& c = config_.drivers.imu;
   drivers::CanImuDecoder decoder(c.can_profile, c.j1939_source_address, c.can_signals, 1.5 / config_.imu.rate_hz);
-  double last_time = -1.0;
   while (!stop.load(std::memory_order_relaxed)) {
     try {
       drivers::SocketCan can(c.can_interface);
@@ -197,10 +203,11 @@ void CanImuSource::run(ImuOutput& out, const std::atomic<bool>& stop) {
       while (!stop.load(std::memory_order_relaxed)) {
         out.heartbeat();
         if (!can.read(frame, 50)) continue;
-        if (auto s = decoder.feed(frame)) {
+        auto s = decoder.feed(frame);
+        out.transport.lost.store(decoder.stats().unpaired, std::memory_order_relaxed);
+        out.transport.refused.store(decoder.stats().not_available, std::memory_order_relaxed);
+        if (s) {
           s->time += static_cast<double>(out.pps_correction_ns.load(std::memory_order_relaxed)) * 1e-9;
-          if (s->time <= last_time) continue;
-          last_time = s->time;
           out.sample(*s);
         }
       }

@@ -95,6 +95,7 @@ PacketKind RsHeliosDecoder::feed(std::span<const std::uint8_t> payload, std::int
       ++stats_.broken_first_block;
       return PacketKind::Rejected;
     case MsopStatus::NoCalibration:
+      if (hold(payload, arrival_ns)) return PacketKind::Msop;
       ++stats_.no_calibration;
       return PacketKind::Rejected;
   }
@@ -139,13 +140,27 @@ void RsHeliosDecoder::on_difop(const HeliosDifop& difop) {
   msop_.set_rotation_hz(difop.rotation_hz());
   if (!difop.angles_valid) {
     ++stats_.difop_angles_rejected;
-    return;
-  }
-  if (options_.use_difop_angles) {
+  } else if (options_.use_difop_angles) {
     // The 16P's DIFOP carries 32 rows; its lasers are the first 16 (slot % 16, §8).
     msop_.set_angles(std::span<const double>(difop.angles.vertical_deg),
                      std::span<const double>(difop.angles.horizontal_deg));
   }
+  decode_held();
+}
+
+bool RsHeliosDecoder::hold(std::span<const std::uint8_t> payload, std::int64_t arrival_ns) {
+  // After a DIFOP, missing angles mean its table was unusable: waiting would not help.
+  if (difop_ || held_.size() >= options_.max_held_packets) return false;
+  held_.push_back({std::vector<std::uint8_t>(payload.begin(), payload.end()), arrival_ns});
+  ++stats_.held_for_calibration;
+  return true;
+}
+
+void RsHeliosDecoder::decode_held() {
+  // Exactly as if they had come after this DIFOP (the order of a capture taken on one socket).
+  std::vector<HeldPacket> held;
+  held.swap(held_);
+  for (const auto& p : held) feed(p.payload, p.arrival_ns);
 }
 
 }  // namespace liod::drivers

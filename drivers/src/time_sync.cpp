@@ -3,6 +3,7 @@
 #include <gpiod.h>
 
 #include <cerrno>
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
@@ -49,6 +50,25 @@ std::int64_t ClockJumpDetector::check() noexcept {
     return step;
   }
   return 0;
+}
+
+std::int64_t ClockStepBridge::correct(std::int64_t data_ns, std::int64_t arrival_ns) noexcept {
+  if (have_previous_) {
+    const std::int64_t data_dt = data_ns - previous_data_ns_;
+    const std::int64_t arrival_dt = arrival_ns - previous_arrival_ns_;
+    if (data_dt - arrival_dt > threshold_ns_ || data_dt < -threshold_ns_) {
+      const std::int64_t kept = spacing_ns_ >= 0 ? spacing_ns_ : std::max<std::int64_t>(arrival_dt, 0);
+      last_step_ns_ = data_dt - kept;
+      correction_ns_ -= last_step_ns_;
+      ++steps_;
+    } else if (data_dt >= 0 && data_dt <= threshold_ns_) {
+      spacing_ns_ = data_dt;
+    }
+  }
+  have_previous_ = true;
+  previous_data_ns_ = data_ns;
+  previous_arrival_ns_ = arrival_ns;
+  return data_ns + correction_ns_;
 }
 
 std::int64_t pps_edge_correction(std::int64_t edge_ns) noexcept {

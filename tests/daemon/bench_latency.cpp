@@ -4,12 +4,17 @@
 //    (end to end, measured by the client), and the pipeline's own figure (kernel arrival of that
 //    packet -> written to the socket);
 //  - IMU: sample handed to the pipeline -> its IMU-rate pose written to the socket.
-// Usage: bench_latency [DRIVE_DIR]   (default: generates one with liod-sim into /tmp)
+// Scan latency is printed for all scans and for the steady state: the first 2 s of poses are the
+// start-up (gravity alignment, the rolling start's speed search, the map restarted once the speed
+// is known), each a one-off several times the cost of a scan.
+// Usage: bench_latency [DRIVE_DIR]   (default: generates a 30 s drive with liod-sim into /tmp)
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
+#include <string>
 #include <thread>
 
 #include "udp_sender.hpp"
@@ -27,12 +32,25 @@ double pct(std::vector<double> v, double q) {
   std::sort(v.begin(), v.end());
   return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
 }
+
+// The figures depend on what else runs: print the load average next to them.
+std::string load_average() {
+  std::ifstream in("/proc/loadavg");
+  std::string one, five, fifteen;
+  in >> one >> five >> fifteen;
+  return one + " " + five + " " + fifteen;
+}
+
+void print_stage(const char* name, const LatencyStats::Summary& s) {
+  std::printf("  %-34s median %6.2f ms, p99 %6.2f ms, max %6.2f ms\n", name, s.median_us / 1e3, s.p99_us / 1e3, s.max_us / 1e3);
+}
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::filesystem::path drive = argc > 1 ? argv[1] : "/tmp/liod-bench-drive";
+  std::filesystem::path drive = argc > 1 ? argv[1] : "/tmp/liod-bench-drive-30s";
   if (!std::filesystem::exists(drive / "lidar.pcap")) {
-    const std::string cmd = std::string(LIOD_SOURCE_DIR) + "/build/bin/liod-sim --route urban --seed 3 --duration 8 --max-speed 12 --out " + drive.string();
+    std::filesystem::create_directories(drive);
+    const std::string cmd = std::string(LIOD_BINARY_DIR) + "/bin/liod-sim --route urban --seed 3 --duration 30 --max-speed 12 --out " + drive.string();
     std::printf("generating the drive: %s\n", cmd.c_str());
     if (std::system(cmd.c_str()) != 0) return 1;
   }
@@ -62,7 +80,15 @@ int main(int argc, char** argv) {
   PipelineOptions po;
   po.ordering = Ordering::Arrival;
   po.pose_socket = config.output.pose_socket;
+  po.bridge_clock_steps = true;  // as liod run
   Pipeline pipeline(config, po);
+  std::vector<double> front_end_ms, map_ms;  // the odometry's own split of its time (publisher thread)
+  pipeline.add_sink([&](const PoseEvent& ev) {
+    if (ev.message.type != pose::MessageType::ScanPose) return;
+    front_end_ms.push_back(ev.diagnostics.deskew_ms + ev.diagnostics.features_ms + ev.diagnostics.registration_ms);
+    map_ms.push_back(ev.diagnostics.map_ms);
+  });
+  std::printf("load average before: %s (%u CPUs)\n", load_average().c_str(), std::thread::hardware_concurrency());
   auto pace = std::make_shared<PaceClock>();
   pace->pace = 1.0;
   pace->data_start_ns = first_imu_time_ns((drive / "imu.csv").string());
@@ -109,21 +135,34 @@ int main(int argc, char** argv) {
   sending = false;
   reader.join();
   pipeline.drain(std::chrono::milliseconds(3000));
-  std::vector<double> e2e_ms;
+  std::vector<double> e2e_ms, steady_e2e_ms;
   const double offset = config.extrinsics.lidar_time_offset_s;
+  constexpr double kStartUpS = 2.0;
   for (const auto& [t, arrival] : received) {
     const auto it = sweep_packet.lower_bound(t - offset - 1e-6);
     if (it == sweep_packet.end() || std::abs(it->first + offset - t) > 1e-6 || it->second >= send_ns.size()) continue;
     e2e_ms.push_back(static_cast<double>(arrival - send_ns[it->second]) * 1e-6);
+    if (t - received.front().first >= kStartUpS) steady_e2e_ms.push_back(e2e_ms.back());
   }
   const auto sl = pipeline.scan_latency();
   const auto il = pipeline.imu_latency();
   std::printf("scan poses: %zu received, %zu matched to their completing packet\n", received.size(), e2e_ms.size());
   std::printf("scan latency, last packet sent -> pose at client: median %.2f ms, p99 %.2f ms, max %.2f ms\n", pct(e2e_ms, 0.5),
               pct(e2e_ms, 0.99), e2e_ms.empty() ? 0.0 : *std::max_element(e2e_ms.begin(), e2e_ms.end()));
+  std::printf("  the same after the first %.0f s (steady state, n=%zu): median %.2f ms, p99 %.2f ms, max %.2f ms\n", kStartUpS,
+              steady_e2e_ms.size(), pct(steady_e2e_ms, 0.5), pct(steady_e2e_ms, 0.99),
+              steady_e2e_ms.empty() ? 0.0 : *std::max_element(steady_e2e_ms.begin(), steady_e2e_ms.end()));
   std::printf("scan latency, packet arrival -> pose written (pipeline): median %.2f ms, p99 %.2f ms (n=%zu)\n", sl.median_us / 1e3,
               sl.p99_us / 1e3, sl.count);
+  const auto stages = pipeline.scan_stages();
+  print_stage("socket (kernel -> LiDAR thread):", stages.receive);
+  print_stage("ring + wait for IMU data:", stages.wait);
+  print_stage("odometry (process):", stages.process);
+  print_stage("pose ring -> written to the socket:", stages.publish);
+  std::printf("  odometry split: front end median %.2f ms, p99 %.2f ms; map update median %.2f ms, p99 %.2f ms\n",
+              pct(front_end_ms, 0.5), pct(front_end_ms, 0.99), pct(map_ms, 0.5), pct(map_ms, 0.99));
   std::printf("IMU latency, sample in -> IMU-rate pose written (pipeline): median %.1f us, p99 %.1f us, max %.1f us (n=%zu)\n",
               il.median_us, il.p99_us, il.max_us, il.count);
+  std::printf("load average after: %s\n", load_average().c_str());
   return 0;
 }

@@ -108,7 +108,7 @@ TEST(SerialImu, PseudoTerminalEndToEnd) {
   config.drivers.imu.serial_baud = 921600;
   SpscRing<ImuItem> ring(1024);
   std::atomic<bool> stop{false};
-  ImuOutput out(ring, false, stop);
+  ImuOutput out(ring, false, stop, static_cast<std::int64_t>(Config{}.time.jump_threshold_s * 1e9));
   SerialImuSource source(config);
   std::thread t([&] { source.run(out, stop); });
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
@@ -241,7 +241,7 @@ TEST(CanImu, ThroughVcanWhereAllowed) {
   config.drivers.imu.can_interface = name;
   SpscRing<ImuItem> ring(64);
   std::atomic<bool> stop{false};
-  ImuOutput out(ring, false, stop);
+  ImuOutput out(ring, false, stop, static_cast<std::int64_t>(Config{}.time.jump_threshold_s * 1e9));
   CanImuSource source(config);
   std::thread t([&] { source.run(out, stop); });
   std::this_thread::sleep_for(std::chrono::milliseconds(200));

@@ -1,4 +1,5 @@
-// Time: the host/sensor offset tracker (minimum filter, clock jumps) and the PPS edge rule.
+// Time: the host/sensor offset tracker (minimum filter, clock jumps), the clock-step bridge and
+// the PPS edge rule.
 #include <gtest/gtest.h>
 
 #include <limits>
@@ -52,4 +53,45 @@ TEST(ClockJump, NoJumpWhenClockIsSteady) {
   ClockJumpDetector d(100000000);
   EXPECT_EQ(d.check(), 0);
   EXPECT_EQ(d.jumps(), 0U);
+}
+
+namespace {
+constexpr std::int64_t kMs = 1000000;
+constexpr std::int64_t kDataStart = 1700000000LL * 1000 * kMs;  // a Unix-epoch data clock
+}  // namespace
+
+TEST(ClockStepBridge, ForwardAndBackwardStepsAreTakenOut) {
+  ClockStepBridge b(100 * kMs);
+  std::int64_t data = kDataStart;
+  std::int64_t arrival = 5000 * kMs;
+  std::int64_t expected = data;
+  for (int i = 0; i < 3000; ++i) {
+    if (i == 1000) data += 3600 * 1000 * kMs;  // the sensor re-synchronised an hour ahead
+    if (i == 2000) data -= 2500 * kMs;         // the host clock stepped back 2.5 s
+    ASSERT_EQ(b.correct(data, arrival), expected) << "sample " << i;
+    data += 5 * kMs;
+    arrival += 5 * kMs + (i % 7) * 100000;  // delivery jitter up to 0.6 ms
+    expected += 5 * kMs;
+  }
+  EXPECT_EQ(b.steps(), 2U);
+  EXPECT_EQ(b.last_step_ns(), -2500 * kMs);
+  EXPECT_EQ(b.correction_ns(), -3600 * 1000 * kMs + 2500 * kMs);
+}
+
+TEST(ClockStepBridge, LateDeliveryAndLostSamplesAreNotSteps) {
+  ClockStepBridge b(100 * kMs);
+  std::int64_t data = kDataStart;
+  std::int64_t arrival = 0;
+  for (int i = 0; i < 1000; ++i) {
+    if (i == 300) arrival += 400 * kMs;  // the reader stalled: 80 samples arrive in a burst
+    if (i > 300 && i < 380) arrival -= 5 * kMs;
+    if (i == 600) {                      // 0.5 s of samples lost: both clocks advance
+      data += 500 * kMs;
+      arrival += 500 * kMs;
+    }
+    ASSERT_EQ(b.correct(data, arrival), data) << "sample " << i;
+    data += 5 * kMs;
+    arrival += 5 * kMs;
+  }
+  EXPECT_EQ(b.steps(), 0U);
 }

@@ -47,7 +47,7 @@ void udp_same_sweeps(double pace) {
   {
     drivers::SpscRing<ScanItem> ring(64);
     std::atomic<bool> stop{false};
-    LidarOutput out(config, ring, true, stop);
+    LidarOutput out(config, ring, true, false, stop);
     drivers::PcapReader reader(pcap);
     drivers::UdpDatagram d;
     while (reader.next(d)) out.packet(d.payload, d.capture_time_ns, d.dst_port);
@@ -59,7 +59,7 @@ void udp_same_sweeps(double pace) {
 
   drivers::SpscRing<ScanItem> ring(64);
   std::atomic<bool> stop{false};
-  LidarOutput out(config, ring, false, stop);
+  LidarOutput out(config, ring, false, true, stop);  // live, as liod run
   UdpLidarSource source(config);
   std::thread driver([&] { source.run(out, stop); });
   std::this_thread::sleep_for(std::chrono::milliseconds(200));  // sockets bound

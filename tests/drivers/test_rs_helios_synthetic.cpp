@@ -392,5 +392,48 @@ TEST(RsHeliosSynthetic, NothingIsDecodedWithoutCalibration) {
   EXPECT_EQ(dec.stats().no_calibration, 1U);
 }
 
+// Live, MSOP and DIFOP come on two sockets: packets that raced ahead of the first DIFOP are held
+// and decoded once it arrives, giving exactly the sweeps of the capture's DIFOP-first order.
+TEST(RsHeliosSynthetic, MsopBeforeTheFirstDifopIsHeldAndDecodedAfterIt) {
+  std::vector<std::vector<std::uint8_t>> msop;
+  // 2.4° per packet from 350°: the sweep wraps at 0° after 5 packets.
+  for (int k = 0; k < 12; ++k) {
+    msop.push_back(test::make_msop(1'700'000'000'000'000LL + 667LL * k, static_cast<std::uint32_t>(k + 1),
+                                   varied_blocks(static_cast<std::uint16_t>((35000 + 240 * k) % 36000), false)));
+  }
+  const auto difop = test::make_difop(kVert, kHoriz, helios::kReturnStrongest);
+  auto decode = [&](std::size_t difop_after, std::size_t max_held) {
+    HeliosOptions o;
+    o.max_held_packets = max_held;
+    o.emit_partial_sweep_on_flush = true;
+    std::vector<Scan> sweeps;
+    RsHeliosDecoder dec(o, [&](Scan& s, const SweepInfo&) { sweeps.push_back(s); });
+    for (std::size_t k = 0; k <= msop.size(); ++k) {
+      if (k == difop_after) dec.feed(difop);
+      if (k < msop.size()) dec.feed(msop[k]);
+    }
+    dec.flush();
+    return std::make_pair(sweeps, dec.stats());
+  };
+  const auto [reference, reference_stats] = decode(0, 0);
+  const auto [raced, raced_stats] = decode(3, 8);
+  ASSERT_EQ(reference.size(), 2U);
+  ASSERT_EQ(raced.size(), reference.size());
+  for (std::size_t i = 0; i < reference.size(); ++i) {
+    EXPECT_EQ(raced[i].start_time, reference[i].start_time);
+    EXPECT_EQ(raced[i].end_time, reference[i].end_time);
+    ASSERT_EQ(raced[i].points.size(), reference[i].points.size());
+    EXPECT_EQ(raced[i].points.back().x, reference[i].points.back().x);
+  }
+  EXPECT_EQ(raced_stats.held_for_calibration, 3U);
+  EXPECT_EQ(raced_stats.msop, reference_stats.msop);
+  EXPECT_EQ(raced_stats.no_calibration, 0U);
+  // Bounded: past the limit they are refused as before.
+  const auto [short_of_room, short_stats] = decode(3, 2);
+  EXPECT_EQ(short_stats.held_for_calibration, 2U);
+  EXPECT_EQ(short_stats.no_calibration, 1U);
+  EXPECT_EQ(short_stats.msop, reference_stats.msop - 1);
+}
+
 }  // namespace
 }  // namespace liod::drivers

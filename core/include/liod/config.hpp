@@ -28,6 +28,7 @@ struct LidarConfig {
   double min_range_m = 0.1;      // decoder limits (sensor spec)
   double max_range_m = 180.0;
   double split_azimuth_deg = 0.0;
+  int packets_before_difop = 4096;  // without angles_csv: MSOP held until the first DIFOP (1 s is ~1500)
 };
 
 struct ImuConfig {
@@ -173,6 +174,7 @@ struct TimeConfig {
   LidarClock lidar_clock = LidarClock::kAuto;  // auto: sensor time when DIFOP says PTP/GPS synced, else host
   double offset_window_s = 2.0;     // host-sensor offset = minimum of (arrival - header) over this window
   double jump_threshold_s = 0.1;    // an offset or host clock step beyond this is a clock jump
+  double jump_flag_s = 10.0;        // poses carry the clock_jump flag this long after one
   double imu_wait_s = 0.1;          // a scan waits at most this long (host time) for the IMU to reach its end
   std::string pps_chip;             // "" = no PPS; else a GPIO chip name (e.g. gpiochip0)
   int pps_line = 0;                 // line offset of the PPS input on that chip

@@ -71,6 +71,8 @@ class LidarInertialOdometry {
 
   /// The latest state propagated with the IMU up to the newest sample (IMU-rate output).
   std::optional<NavState> propagated_state() const;
+  /// The gravity vector in the world frame the states are propagated with.
+  const Eigen::Vector3d& gravity() const { return gravity_; }
 
   bool initialized() const { return initialized_; }
   const std::deque<Keyframe>& keyframes() const { return keyframes_; }

@@ -2,23 +2,26 @@
 // liod's threads and rings, shared by `liod run`, `liod record` and `liod replay`:
 //
 //   LiDAR source thread --ScanItem ring--> odometry thread --PoseEvent ring--> publisher thread
-//   IMU source thread  ---ImuItem ring--->      |                               (pose socket, sinks)
-//                                               +--Keyframe ring--> backend thread (stub: counts)
+//   IMU source thread  ---ImuItem ring--->      |    |                          (pose socket, sinks)
+//          |  ^                                 |    +--Keyframe ring--> backend thread
+//          |  +------ latest scan update -------+
+//          +--------------------- IMU-rate PoseEvent ring ---------------> publisher thread
 //
 // A source is live (UDP socket, serial port, SocketCAN) or a file (pcap, IMU CSV); either way it
 // hands raw packets / samples to LidarOutput / ImuOutput, which own the decoding, time
 // correction and ring hand-off, so downstream cannot tell replay from live.
 //
 // Ordering (what the odometry sees, in which order):
-// - Live (`Ordering::Arrival`): IMU samples are fed as they arrive (IMU-rate poses go out at
-//   once); a scan is processed as soon as the IMU has reached its end time, or after
+// - Live (`Ordering::Arrival`): IMU samples are fed as they arrive; the IMU thread itself turns
+//   each sample into an IMU-rate pose (the last scan update propagated, ImuRatePropagator), so
+//   those never wait behind a scan update. A scan is processed as soon as the IMU has reached its end time, or after
 //   time.imu_wait_s without it. A scan's pose depends only on the IMU samples up to the first
 //   one past its end, so it does not depend on thread timing while the IMU keeps up.
 // - Replay as fast as possible (`Ordering::Lockstep`): sources run unthrottled and the rings are
 //   lossless (producers wait for room), and the odometry consumes in data order exactly like the
 //   original single-threaded loop: before a scan, IMU samples up to its end + 20 ms; the scan is
-//   processed once the IMU reaches its end (or the IMU log ended). Same input -> same call
-//   sequence -> same poses, every run.
+//   processed once the IMU reaches its end (or the IMU log ended); IMU-rate poses are made on the
+//   odometry thread in that same order. Same input -> same call sequence -> same poses, every run.
 
 #include <Eigen/Core>
 #include <atomic>
@@ -28,33 +31,20 @@
 #include <memory>
 #include <mutex>
 #include <optional>
-#include <span>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "liod/config.hpp"
 #include "liod/daemon/backend_worker.hpp"
+#include "liod/daemon/imu_rate_propagator.hpp"
 #include "liod/daemon/pose_protocol.hpp"
-#include "liod/drivers/rs_helios.hpp"
+#include "liod/daemon/sensor_outputs.hpp"
 #include "liod/drivers/spsc_ring.hpp"
-#include "liod/drivers/time_sync.hpp"
 #include "liod/lidar_inertial_odometry.hpp"
 #include "liod/types.hpp"
 
 namespace liod {
-
-std::int64_t steady_ns() noexcept;
-
-struct ScanItem {
-  Scan scan;
-  std::int64_t ready_steady_ns = 0;  ///< when the packet completing the sweep arrived
-};
-
-struct ImuItem {
-  ImuSample sample;
-  std::int64_t arrival_steady_ns = 0;
-};
 
 /// Per-scan numbers for the scan log (the scan-rate PoseEvent carries them).
 struct ScanDiagnostics {
@@ -69,6 +59,9 @@ struct PoseEvent {
   pose::PoseMessage message;
   ScanDiagnostics diagnostics;        ///< scan poses only
   std::int64_t input_steady_ns = 0;   ///< arrival of the input that produced it (latency)
+  std::int64_t queued_ns = 0;         ///< scan poses: of that, waiting in the socket for the driver thread
+  std::int64_t process_start_ns = 0;  ///< scan poses: the odometry started on the scan
+  std::int64_t process_end_ns = 0;    ///< scan poses: the pose was ready
 };
 
 struct KeyframeEvent {
@@ -93,75 +86,6 @@ class LatencyStats {
   std::vector<double> window_;
   std::size_t next_ = 0;
   double max_ = 0;
-};
-
-/// What the LiDAR driver thread does with each UDP payload, whichever the source.
-class LidarOutput {
- public:
-  LidarOutput(const Config& config, drivers::SpscRing<ScanItem>& ring, bool lossless, const std::atomic<bool>& stop);
-  /// One datagram. `arrival_realtime_ns`: kernel receive time (live) or capture time (file).
-  void packet(std::span<const std::uint8_t> payload, std::int64_t arrival_realtime_ns, std::uint16_t dst_port);
-  /// End of stream: flush the decoder and close the ring.
-  void finish();
-  void heartbeat() noexcept { heartbeat_.store(steady_ns(), std::memory_order_relaxed); }
-
-  drivers::HeliosStats decoder_stats() const;
-  std::int64_t heartbeat_ns() const noexcept { return heartbeat_.load(std::memory_order_relaxed); }
-  std::uint64_t packets() const noexcept { return packets_.load(std::memory_order_relaxed); }
-  std::uint64_t lost_packets() const noexcept { return lost_.load(std::memory_order_relaxed); }
-  std::uint64_t sweeps() const noexcept { return sweeps_.load(std::memory_order_relaxed); }
-  std::int64_t last_sweep_steady_ns() const noexcept { return last_sweep_.load(std::memory_order_relaxed); }
-  /// Host - LiDAR clock offset in use (0 when the LiDAR's own time is used), and whether the
-  /// LiDAR reports GPS/PTP sync.
-  std::int64_t clock_offset_ns() const noexcept { return offset_used_.load(std::memory_order_relaxed); }
-  bool sensor_synced() const noexcept { return synced_.load(std::memory_order_relaxed); }
-  std::uint64_t clock_jumps() const noexcept { return jumps_.load(std::memory_order_relaxed); }
-
-  /// Called with every datagram before decoding (liod record).
-  std::function<void(std::span<const std::uint8_t>, std::int64_t, std::uint16_t)> tap;
-
- private:
-  void on_sweep(Scan& scan);
-  const Config& config_;
-  drivers::SpscRing<ScanItem>& ring_;
-  bool lossless_;
-  const std::atomic<bool>& stop_;
-  drivers::OffsetTracker offset_;
-  std::unique_ptr<drivers::RsHeliosDecoder> decoder_;
-  ScanItem item_;
-  std::int64_t packet_steady_ = 0;
-  mutable std::mutex stats_mutex_;  // decoder stats are copied out for health (once a second)
-  drivers::HeliosStats stats_copy_;
-  std::atomic<std::int64_t> heartbeat_{0};
-  std::atomic<std::uint64_t> packets_{0}, lost_{0}, sweeps_{0}, jumps_{0};
-  std::atomic<std::int64_t> last_sweep_{0};
-  std::atomic<std::int64_t> offset_used_{0};
-  std::atomic<bool> synced_{false};
-};
-
-/// What the IMU driver thread does with each sample, whichever the transport.
-class ImuOutput {
- public:
-  ImuOutput(drivers::SpscRing<ImuItem>& ring, bool lossless, const std::atomic<bool>& stop)
-      : ring_(ring), lossless_(lossless), stop_(stop) {}
-  void sample(const ImuSample& s);
-  void finish() { ring_.close(); }
-  void heartbeat() noexcept { heartbeat_.store(steady_ns(), std::memory_order_relaxed); }
-  std::int64_t heartbeat_ns() const noexcept { return heartbeat_.load(std::memory_order_relaxed); }
-  std::uint64_t samples() const noexcept { return samples_.load(std::memory_order_relaxed); }
-  std::int64_t last_sample_steady_ns() const noexcept { return last_.load(std::memory_order_relaxed); }
-  /// Host-clock correction from PPS (added to host-stamped samples by the transports).
-  std::atomic<std::int64_t> pps_correction_ns{0};
-  std::function<void(const ImuSample&)> tap;
-
- private:
-  drivers::SpscRing<ImuItem>& ring_;
-  bool lossless_;
-  const std::atomic<bool>& stop_;
-  ImuItem item_;
-  std::atomic<std::int64_t> heartbeat_{0};
-  std::atomic<std::uint64_t> samples_{0};
-  std::atomic<std::int64_t> last_{0};
 };
 
 class LidarSource {
@@ -193,6 +117,9 @@ struct PipelineOptions {
   bool imu_rate_poses = true;     ///< compute and publish IMU-rate poses
   std::string pose_socket;        ///< "" = no socket
   bool realtime_threads = true;   ///< apply threads.* priorities/affinity
+  /// Live sources (Arrival ordering): take steps of the LiDAR's and the IMU's time out
+  /// (drivers::ClockStepBridge). Not for file replays: they play a recording as it is.
+  bool bridge_clock_steps = false;
 };
 
 /// Totals for the replay summary (valid after join()).
@@ -235,6 +162,17 @@ class Pipeline {
   std::string health_json(HealthRates& rates) const;
   LatencyStats::Summary scan_latency() const { return scan_latency_.summary(); }
   LatencyStats::Summary imu_latency() const { return imu_latency_.summary(); }
+  /// The scan latency by stage: in the socket before the driver thread took the packet / in the
+  /// ring and waiting for IMU data / odometry / to the socket.
+  struct ScanStages {
+    LatencyStats::Summary receive, wait, process, publish;
+  };
+  ScanStages scan_stages() const {
+    return {scan_receive_.summary(), scan_wait_.summary(), scan_process_.summary(), scan_publish_.summary()};
+  }
+  /// The host clock was stepped (run_command's ClockJumpDetector): poses carry kClockJump for
+  /// time.jump_flag_s (so they do after a step of the LiDAR's or the IMU's own time).
+  void note_host_clock_jump() noexcept;
   /// First error a thread died with ("" if none).
   std::string error() const;
 
@@ -247,6 +185,13 @@ class Pipeline {
   void apply_thread_config(const ThreadConfig& tc, const char* name);
   void fail(const std::string& what);
   void push_pose(PoseEvent& ev);
+  /// Flags from host-time health and clock steps for a pose at `pose_time` (live ordering only:
+  /// replay must not depend on thread timing).
+  std::uint32_t live_flags(double pose_time) const;
+  /// Propagates `item` from the latest anchor into an IMU-rate pose; false before the first anchor.
+  bool make_imu_pose(const ImuItem& item, PoseEvent& ev);
+  /// Live: the IMU thread's IMU-rate pose for each sample.
+  void publish_imu_pose(const ImuItem& item);
 
   Config config_;
   PipelineOptions options_;
@@ -256,12 +201,16 @@ class Pipeline {
   drivers::SpscRing<ScanItem> scan_ring_;
   drivers::SpscRing<ImuItem> imu_ring_;
   drivers::SpscRing<PoseEvent> pose_ring_;
+  drivers::SpscRing<PoseEvent> imu_pose_ring_;  // live: IMU thread -> publisher
   drivers::SpscRing<KeyframeEvent> keyframe_ring_;
   std::unique_ptr<LidarOutput> lidar_out_;
   std::unique_ptr<ImuOutput> imu_out_;
   std::unique_ptr<BackendWorker> backend_;
   std::unique_ptr<LidarSource> lidar_source_;
   std::unique_ptr<ImuSource> imu_source_;
+  ImuRatePropagator propagator_;  // used by one thread: the IMU thread live, the odometry thread in lockstep
+  AnchorExchange anchors_;        // live: odometry thread -> IMU thread
+  PoseEvent imu_event_;           // the IMU thread's reused event
   std::vector<std::function<void(const PoseEvent&)>> sinks_;
   std::vector<std::thread> threads_;
   int thread_count_ = 0;
@@ -269,9 +218,10 @@ class Pipeline {
   std::atomic<std::int64_t> hb_odometry_{0}, hb_publisher_{0}, hb_backend_{0};
   std::atomic<bool> imu_done_{false};
   OdometryTotals totals_;
-  std::atomic<std::uint64_t> scans_processed_{0}, backend_keyframes_{0};
+  std::atomic<std::uint64_t> scans_processed_{0}, backend_keyframes_{0}, host_jumps_{0}, odometry_imu_dropped_{0};
+  std::atomic<std::int64_t> host_jump_steady_ns_{0};
   std::atomic<double> last_process_ms_{0.0};
-  LatencyStats scan_latency_, imu_latency_, queue_latency_;
+  LatencyStats scan_latency_, imu_latency_, scan_receive_, scan_wait_, scan_process_, scan_publish_;
   std::atomic<std::uint64_t> socket_clients_{0}, socket_skipped_{0}, socket_dropped_{0};
   mutable std::mutex error_mutex_;
   std::string error_;

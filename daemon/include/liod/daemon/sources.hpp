@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -21,8 +22,7 @@ struct PaceClock {
   std::int64_t data_start_ns = 0;
   std::int64_t host_start_steady_ns = 0;
   /// Sleeps (in bounded steps, calling `heartbeat`) until `data_ns` is due. False if stopped.
-  template <typename Heartbeat>
-  bool wait_until(std::int64_t data_ns, const std::atomic<bool>& stop, Heartbeat&& heartbeat) const;
+  bool wait_until(std::int64_t data_ns, const std::atomic<bool>& stop, const std::function<void()>& heartbeat) const;
 };
 
 class PcapLidarSource : public LidarSource {

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <vector>
 
 #include "liod/drivers/packet_points.hpp"
 #include "liod/drivers/rs_helios_calibration.hpp"
@@ -42,6 +43,12 @@ struct HeliosOptions {
   double split_azimuth_deg = 0.0;
   double max_block_gap_s = 0.05;
   bool emit_partial_sweep_on_flush = false;
+  /// Without an angle table, MSOP packets that arrive before the first DIFOP are held (up to
+  /// this many, the rest refused as no_calibration) and decoded, in order, once it arrives:
+  /// live, MSOP and DIFOP come on two sockets, and the first sweep would otherwise lose the
+  /// packets that raced ahead of the calibration. 0 = refuse them at once (rs_driver's
+  /// wait_for_difop).
+  std::size_t max_held_packets = 0;
 };
 
 struct HeliosStats {
@@ -55,6 +62,7 @@ struct HeliosStats {
   std::uint64_t bad_azimuth = 0;
   std::uint64_t broken_first_block = 0;
   std::uint64_t no_calibration = 0;
+  std::uint64_t held_for_calibration = 0;  ///< MSOP held until the first DIFOP, then decoded
   // Accepted with a defect.
   std::uint64_t broken_block_flag = 0;      ///< decoded only up to a broken block flag
   std::uint64_t difop_angles_rejected = 0;  ///< DIFOPs whose angle table failed §6's checks
@@ -95,6 +103,9 @@ class RsHeliosDecoder {
 
  private:
   void on_difop(const HeliosDifop& difop);
+  /// Keeps an MSOP packet that came before any calibration; false when it cannot be kept.
+  bool hold(std::span<const std::uint8_t> payload, std::int64_t arrival_ns);
+  void decode_held();
   void on_msop_header(const MsopHeader& header);
   [[nodiscard]] bool packet_is_dual(std::span<const std::uint8_t> payload) const noexcept;
 
@@ -111,6 +122,11 @@ class RsHeliosDecoder {
   bool have_azimuth_ = false;
   std::uint16_t last_azimuth_ = 0;
   bool last_dual_ = false;
+  struct HeldPacket {
+    std::vector<std::uint8_t> payload;
+    std::int64_t arrival_ns = 0;
+  };
+  std::vector<HeldPacket> held_;
 };
 
 }  // namespace liod::drivers

@@ -9,6 +9,8 @@
 //   `confirm` consecutive samples, is a clock jump: the window restarts from the new level.
 // - ClockJumpDetector: watches CLOCK_REALTIME against CLOCK_MONOTONIC (which never jumps) and
 //   reports steps of the host clock (settimeofday, NTP step).
+// - ClockStepBridge: keeps one stream's time continuous through such a step (or a sensor that
+//   re-synchronised), so that the odometry never integrates across a jump.
 // - PpsDiscipline: a pulse-per-second on a GPIO line (libgpiod v1.6 API) marks the start of each
 //   UTC second; the host time of the edge tells the host clock's error, which corrects the
 //   host-stamped IMU samples.
@@ -62,6 +64,36 @@ class ClockJumpDetector {
   std::int64_t threshold_ns_;
   std::int64_t base_;
   std::uint64_t jumps_ = 0;
+};
+
+/// Takes the steps out of a stream's data clock. Each sample comes with its arrival time on the
+/// monotonic clock, which never steps, and that tells a step from what else moves data time:
+/// - forward: the data advanced by more than `threshold` beyond the arrival clock since the
+///   previous sample (lost samples advance both clocks; a late delivery only the arrival clock);
+/// - backward: the data time went back by more than `threshold` (nothing else does that).
+/// Across a step the stream is taken to have kept its previous sample spacing, so a regular
+/// stream comes out exactly as if nothing had happened; the correction then stays (liod's
+/// timeline is the one it started on, until a restart) and later steps add to it.
+/// The data must run at the arrival clock's pace (live, or a replay at recorded pace or faster
+/// with no data gap longer than `threshold` times pace / (pace - 1)).
+class ClockStepBridge {
+ public:
+  explicit ClockStepBridge(std::int64_t threshold_ns) : threshold_ns_(threshold_ns) {}
+  /// The data time with every step so far taken out.
+  std::int64_t correct(std::int64_t data_ns, std::int64_t arrival_ns) noexcept;
+  std::int64_t correction_ns() const noexcept { return correction_ns_; }
+  std::uint64_t steps() const noexcept { return steps_; }
+  /// Size of the last step (data time moved by this much more than the stream's spacing).
+  std::int64_t last_step_ns() const noexcept { return last_step_ns_; }
+
+ private:
+  std::int64_t threshold_ns_;
+  bool have_previous_ = false;
+  std::int64_t previous_data_ns_ = 0, previous_arrival_ns_ = 0;
+  std::int64_t spacing_ns_ = -1;  // the last regular data interval, -1 until there is one
+  std::int64_t correction_ns_ = 0;
+  std::int64_t last_step_ns_ = 0;
+  std::uint64_t steps_ = 0;
 };
 
 /// Watches PPS edges in its own thread. correction_ns() is what to add to a host time to get

@@ -1,0 +1,183 @@
+#include "liod/daemon/sensor_outputs.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+
+#include "liod/drivers/byte_order.hpp"
+
+namespace liod {
+namespace {
+
+drivers::HeliosOptions helios_options(const Config& config) {
+  drivers::HeliosOptions o;
+  o.model = config.lidar.model == LidarModel::kHelios16P ? drivers::HeliosModel::Helios16P : drivers::HeliosModel::Helios5515;
+  if (!config.lidar.angles_csv.empty()) o.angles = drivers::load_angles_csv(config.lidar.angles_csv);
+  o.msop.min_range_m = static_cast<float>(config.lidar.min_range_m);
+  o.msop.max_range_m = static_cast<float>(config.lidar.max_range_m);
+  o.split_azimuth_deg = config.lidar.split_azimuth_deg;
+  o.max_held_packets = static_cast<std::size_t>(config.lidar.packets_before_difop);
+  return o;
+}
+
+}  // namespace
+
+std::int64_t steady_ns() noexcept {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// ---- LidarOutput -------------------------------------------------------------------------------
+LidarOutput::LidarOutput(const Config& config, drivers::SpscRing<ScanItem>& ring, bool lossless, bool bridge_clock_steps,
+                         const std::atomic<bool>& stop)
+    : config_(config), ring_(ring), lossless_(lossless), stop_(stop),
+      offset_(static_cast<std::int64_t>(config.time.offset_window_s * 1e9),
+              static_cast<std::int64_t>(config.time.jump_threshold_s * 1e9)) {
+  if (bridge_clock_steps) bridge_.emplace(static_cast<std::int64_t>(config.time.jump_threshold_s * 1e9));
+  decoder_ = std::make_unique<drivers::RsHeliosDecoder>(helios_options(config),
+                                                        [this](Scan& scan, const drivers::SweepInfo&) { on_sweep(scan); });
+  heartbeat();
+}
+
+void LidarOutput::packet(std::span<const std::uint8_t> payload, std::int64_t arrival_ns, std::uint16_t dst_port,
+                         std::int64_t queued_ns) {
+  packet_steady_ = steady_ns();
+  packet_queued_ = queued_ns;
+  heartbeat_.store(packet_steady_, std::memory_order_relaxed);
+  packets_.fetch_add(1, std::memory_order_relaxed);
+  if (tap) tap(payload, arrival_ns, dst_port);
+  // A sweep this packet ends takes the time shift of the packets before it (they are the sweep).
+  decoder_->feed(payload, arrival_ns);
+  // MSOP header time (spec §3: 6-byte BE seconds + 4-byte BE µs at offset 20) against arrival.
+  if (payload.size() == 1248 && payload[0] == 0x55 && payload[1] == 0xAA && payload[2] == 0x05 && payload[3] == 0x5A) {
+    const std::uint64_t sec = drivers::load_be48(&payload[20]);
+    const std::uint32_t usec = drivers::load_be32(&payload[26]);
+    if (usec < 1000000 && sec < 4000000000ULL) {
+      track_time(static_cast<std::int64_t>(sec) * 1000000000 + static_cast<std::int64_t>(usec) * 1000, arrival_ns);
+    }
+  }
+  const auto s = decoder_->stats();
+  lost_.store(s.lost_packets, std::memory_order_relaxed);
+  std::lock_guard lock(stats_mutex_);
+  stats_copy_ = s;
+}
+
+std::int64_t LidarOutput::clock_offset() const {
+  const auto& difop = decoder_->last_difop();
+  switch (config_.time.lidar_clock) {
+    case LidarClock::kSensor:
+      return 0;
+    case LidarClock::kHost:
+      return offset_.offset_ns();
+    case LidarClock::kAuto: {
+      // The sensor's time when it says it is synced; before its first DIFOP, when it agrees with
+      // the host anyway (both synced, or a recording whose capture times are the header times).
+      const bool agrees = std::llabs(offset_.offset_ns()) < static_cast<std::int64_t>(config_.time.jump_threshold_s * 1e9);
+      const bool use_sensor = difop.has_value() ? difop->time_sync_status != 0 : agrees;
+      return use_sensor ? 0 : offset_.offset_ns();
+    }
+  }
+  return 0;
+}
+
+void LidarOutput::track_time(std::int64_t header_ns, std::int64_t arrival_ns) {
+  offset_.add(arrival_ns, header_ns);
+  jumps_.store(offset_.jumps(), std::memory_order_relaxed);
+  const std::int64_t offset = clock_offset();
+  offset_used_.store(offset, std::memory_order_relaxed);
+  shift_ns_ = offset;
+  // Bridged once the first DIFOP has settled which clock the configuration uses: the switch to
+  // it is not a step. The bridge sees the time the odometry would, so that an offset that
+  // follows a step (host clock) and a sensor that steps both come out continuous.
+  if (!bridge_ || !decoder_->last_difop()) return;
+  const std::uint64_t before = bridge_->steps();
+  bridge_->correct(header_ns + offset, packet_steady_);
+  shift_ns_ += bridge_->correction_ns();
+  if (bridge_->steps() != before) {
+    steps_.store(bridge_->steps(), std::memory_order_relaxed);
+    step_correction_.store(bridge_->correction_ns(), std::memory_order_relaxed);
+    last_step_time_.store(static_cast<double>(header_ns + shift_ns_) * 1e-9 + config_.extrinsics.lidar_time_offset_s,
+                          std::memory_order_relaxed);
+    spdlog::warn("LiDAR time stepped by {:.6f} s against the arrival clock; taken out to keep scan times continuous "
+                 "(total correction {:.6f} s until restart)",
+                 static_cast<double>(bridge_->last_step_ns()) * 1e-9, static_cast<double>(bridge_->correction_ns()) * 1e-9);
+  }
+}
+
+void LidarOutput::on_sweep(Scan& scan) {
+  const auto& difop = decoder_->last_difop();
+  synced_.store(difop.has_value() && difop->time_sync_status != 0, std::memory_order_relaxed);
+  if (shift_ns_ != 0) {
+    const double o = static_cast<double>(shift_ns_) * 1e-9;
+    scan.start_time += o;
+    scan.end_time += o;
+  }
+  using std::swap;
+  swap(item_.scan, scan);
+  item_.ready_steady_ns = packet_steady_;
+  item_.queued_ns = packet_queued_;
+  sweeps_.fetch_add(1, std::memory_order_relaxed);
+  last_sweep_.store(packet_steady_, std::memory_order_relaxed);
+  // Exchange with the ring: item_ comes back with a recycled buffer, handed back to the decoder.
+  if (lossless_) ring_.push_wait(item_, stop_);
+  else ring_.try_push(item_);
+  swap(item_.scan, scan);
+}
+
+void LidarOutput::finish() {
+  decoder_->flush();
+  {
+    std::lock_guard lock(stats_mutex_);
+    stats_copy_ = decoder_->stats();
+  }
+  ring_.close();
+}
+
+drivers::HeliosStats LidarOutput::decoder_stats() const {
+  std::lock_guard lock(stats_mutex_);
+  return stats_copy_;
+}
+
+// ---- ImuOutput ---------------------------------------------------------------------------------
+ImuOutput::ImuOutput(drivers::SpscRing<ImuItem>& ring, bool lossless, const std::atomic<bool>& stop,
+                     std::int64_t step_threshold_ns)
+    : ring_(ring), lossless_(lossless), stop_(stop) {
+  if (step_threshold_ns > 0) bridge_.emplace(step_threshold_ns);
+}
+
+void ImuOutput::sample(const ImuSample& delivered) {
+  const std::int64_t now = steady_ns();
+  heartbeat_.store(now, std::memory_order_relaxed);
+  if (tap) tap(delivered);
+  ImuSample s = delivered;
+  if (bridge_) {
+    // Bridged without the PPS correction the transport added: that one is meant to move the time.
+    const std::int64_t pps = pps_correction_ns.load(std::memory_order_relaxed);
+    const std::uint64_t before = bridge_->steps();
+    bridge_->correct(std::llround(s.time * 1e9) - pps, now);
+    if (bridge_->correction_ns() != 0) s.time += static_cast<double>(bridge_->correction_ns()) * 1e-9;
+    if (bridge_->steps() != before) {
+      steps_.store(bridge_->steps(), std::memory_order_relaxed);
+      step_correction_.store(bridge_->correction_ns(), std::memory_order_relaxed);
+      last_step_time_.store(s.time, std::memory_order_relaxed);
+      spdlog::warn("IMU time stepped by {:.6f} s against the arrival clock; taken out to keep it continuous "
+                   "(total correction {:.6f} s until restart)",
+                   static_cast<double>(bridge_->last_step_ns()) * 1e-9, static_cast<double>(bridge_->correction_ns()) * 1e-9);
+    }
+  }
+  // A duplicate, or a step back too small to be told from jitter: the odometry needs order.
+  if (s.time <= last_time_) {
+    out_of_order_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  last_time_ = s.time;
+  item_.sample = s;
+  item_.arrival_steady_ns = now;
+  if (lossless_) ring_.push_wait(item_, stop_);
+  else ring_.try_push(item_);
+  samples_.fetch_add(1, std::memory_order_relaxed);
+  last_.store(now, std::memory_order_relaxed);
+  if (on_sample) on_sample(ImuItem{s, now});
+}
+
+}  // namespace liod
