@@ -53,6 +53,14 @@ void json_array(std::string& s, const double* v, int n) {
   s += ']';
 }
 
+void apply_request(std::string_view req, ClientMode& mode) {
+  while (!req.empty() && (req.back() == '\r' || req.back() == ' ')) req.remove_suffix(1);
+  if (req == "json") mode.json = true;
+  else if (req == "binary") mode.json = false;
+  else if (req == "scan") mode.scan_only = true;
+  else if (req == "all") mode.scan_only = false;
+}
+
 }  // namespace
 
 void encode(const PoseMessage& m, std::vector<std::uint8_t>& out) {
@@ -159,6 +167,16 @@ DecodeStatus decode(std::span<const std::uint8_t> b, Message& out, std::size_t& 
   }
   consumed = length;
   return DecodeStatus::Ok;
+}
+
+void RequestReader::feed(std::string_view bytes, ClientMode& mode) {
+  line_.append(bytes);
+  std::size_t nl;
+  while ((nl = line_.find('\n')) != std::string::npos) {
+    apply_request(std::string_view(line_.data(), nl), mode);
+    line_.erase(0, nl + 1);
+  }
+  if (line_.size() > kMaxLine) line_.clear();  // not a request: ignore rather than grow
 }
 
 Eigen::Matrix<double, 6, 6> pose_covariance_from_state(const Eigen::Matrix<double, 15, 15>& s) {
