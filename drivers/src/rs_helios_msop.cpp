@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include "liod/drivers/byte_order.hpp"
 #include "liod/drivers/input_error.hpp"
@@ -37,14 +38,22 @@ constexpr std::int32_t kFullCircle = kAzimuthUnits;
   return a;
 }
 
+const std::vector<std::array<float, 2>>& azimuth_trig() {
+  static const std::vector<std::array<float, 2>> table = [] {
+    std::vector<std::array<float, 2>> t(kFullCircle);
+    for (std::int32_t a = 0; a < kFullCircle; ++a) {
+      const double rad = a * 0.01 * std::numbers::pi / 180.0;
+      t[static_cast<std::size_t>(a)] = {static_cast<float>(std::cos(rad)), static_cast<float>(std::sin(rad))};
+    }
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace
 
 MsopDecoder::MsopDecoder(HeliosModel model, MsopDecoderOptions options)
-    : model_(model), options_(options), trig_(kFullCircle) {
-  for (std::int32_t a = 0; a < kFullCircle; ++a) {
-    const double rad = a * 0.01 * std::numbers::pi / 180.0;
-    trig_[static_cast<std::size_t>(a)] = {static_cast<float>(std::cos(rad)), static_cast<float>(std::sin(rad))};
-  }
+    : model_(model), options_(options), trig_(azimuth_trig()) {
   build_slot_tables();
   set_rotation_hz(kDefaultRotationHz);
 }

@@ -6,7 +6,6 @@
 #include <array>
 #include <cstdint>
 #include <span>
-#include <vector>
 
 #include "liod/drivers/packet_points.hpp"
 #include "liod/drivers/rs_helios_model.hpp"
@@ -104,8 +103,9 @@ class MsopDecoder {
   std::array<LaserEntry, 32> lasers_{};
   std::array<std::uint16_t, 32> rings_{};
   /// cos/sin of every azimuth in 0.01° steps: the decoders this one is checked against quantise
-  /// azimuth the same way, and it keeps trigonometry out of the per-point loop.
-  std::vector<std::array<float, 2>> trig_;
+  /// azimuth the same way, and it keeps trigonometry out of the per-point loop. One table, built
+  /// once and shared by every decoder.
+  std::span<const std::array<float, 2>> trig_;
 };
 
 }  // namespace liod::drivers
