@@ -253,6 +253,21 @@ TEST(PcapReader, CorruptRecordLengthStopsWithoutHugeAllocation) {
   EXPECT_NE(reader.error().find("corrupt record header"), std::string::npos) << reader.error();
 }
 
+// Found by fuzz_pcap_reader: a file header claiming a huge snaplen lifted that limit, so a corrupt
+// record length had the reader allocate and zero-fill up to 4 GiB before its read came up short.
+TEST(PcapReader, HugeSnaplenDoesNotLiftTheRecordLengthLimit) {
+  test::TempDir dir;
+  auto bytes = test::classic_pcap(ethernet_records(synthetic_datagrams(3)), 1);
+  store_le32(bytes.data() + 16, 0xFFFFFFFF);  // snaplen
+  const std::size_t frame0 = test::udp_ethernet_frame(6699, std::vector<std::uint8_t>(100)).size();
+  store_le32(bytes.data() + 24 + 16 + frame0 + 8, 587'323'939);  // the fuzzer's captured length
+  test::write_bytes(dir / "corrupt.pcap", bytes);
+  PcapReader reader(dir / "corrupt.pcap");
+  EXPECT_EQ(read_all(reader).size(), 1U);
+  EXPECT_NE(reader.error().find("corrupt record header"), std::string::npos) << reader.error();
+  EXPECT_EQ(reader.stats().malformed, 1U);
+}
+
 TEST(PcapReader, RandomCorruptionNeverCrashes) {
   // Flip random bytes of valid pcap and pcapng files and cut them at random lengths: the reader
   // must either refuse the file at open (InputError) or read to an orderly end.
