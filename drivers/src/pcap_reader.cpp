@@ -47,7 +47,8 @@ struct NgInterface {
       std::uint64_t frac = k >= 64 ? units : units & ((std::uint64_t{1} << k) - 1);
       unsigned shift = k;
       if (shift > 30) {  // keep frac * 1e9 inside 64 bits
-        frac >>= (shift - 30);
+        const unsigned drop = shift - 30;
+        frac = drop >= 64 ? 0 : frac >> drop;  // at 2^-94 s per unit or finer, any count is < 1 ns
         shift = 30;
       }
       ns = whole * 1'000'000'000ULL + ((frac * 1'000'000'000ULL) >> shift);

@@ -109,6 +109,21 @@ TEST(PcapReader, PcapNgDecodesIdenticallyToClassic) {
   }
 }
 
+// Found by fuzz_pcap_reader: an if_tsresol of 2^-127 s (any exponent past 93) shifted a 64-bit
+// value by 64 or more bits, which is undefined behaviour. Such units are all below a nanosecond.
+TEST(PcapReader, PcapNgFinestPowerOfTwoResolutionIsDefined) {
+  test::TempDir dir;
+  const auto data = synthetic_datagrams(3);
+  for (const int resolution : {0x80 | 94, 0x80 | 127}) {
+    auto bytes = test::pcapng(ethernet_records(data), 1);
+    bytes[28 + 20] = static_cast<std::uint8_t>(resolution);  // the IDB's if_tsresol value: SHB (28 bytes), IDB header (16), option header (4)
+    test::write_bytes(dir / "fine.pcapng", bytes);
+    const auto got = read_all(dir / "fine.pcapng");
+    ASSERT_EQ(got.size(), data.size());
+    for (const Datagram& d : got) EXPECT_EQ(d.time_ns, 0) << "if_tsresol 0x" << std::hex << resolution;
+  }
+}
+
 TEST(PcapReader, VlanSllSll2AndRawIpFramesYieldTheSameDatagrams) {
   test::TempDir dir;
   const auto data = synthetic_datagrams(5);
