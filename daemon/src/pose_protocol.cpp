@@ -170,13 +170,21 @@ DecodeStatus decode(std::span<const std::uint8_t> b, Message& out, std::size_t& 
 }
 
 void RequestReader::feed(std::string_view bytes, ClientMode& mode) {
-  line_.append(bytes);
-  std::size_t nl;
-  while ((nl = line_.find('\n')) != std::string::npos) {
-    apply_request(std::string_view(line_.data(), nl), mode);
-    line_.erase(0, nl + 1);
+  while (!bytes.empty()) {
+    const std::size_t nl = bytes.find('\n');
+    if (!overlong_) {
+      line_.append(bytes.substr(0, nl));
+      if (line_.size() > kMaxLine) {  // not a request: skip to its end rather than grow, and never
+        line_.clear();                // take its tail for one (that would depend on the chunking)
+        overlong_ = true;
+      }
+    }
+    if (nl == std::string_view::npos) return;
+    if (!overlong_) apply_request(line_, mode);
+    line_.clear();
+    overlong_ = false;
+    bytes.remove_prefix(nl + 1);
   }
-  if (line_.size() > kMaxLine) line_.clear();  // not a request: ignore rather than grow
 }
 
 Eigen::Matrix<double, 6, 6> pose_covariance_from_state(const Eigen::Matrix<double, 15, 15>& s) {

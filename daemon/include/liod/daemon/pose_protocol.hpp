@@ -99,12 +99,14 @@ struct ClientMode {
 /// a ClientMode. Trailing '\r' and spaces are ignored; unknown lines are ignored.
 class RequestReader {
  public:
-  /// A partial line longer than this is not a request; it is not buffered further.
+  /// A line longer than this is not a request: it is dropped whole, up to its newline, without
+  /// being buffered.
   static constexpr std::size_t kMaxLine = 1024;
   void feed(std::string_view bytes, ClientMode& mode);
 
  private:
-  std::string line_;  // partial request line
+  std::string line_;       // partial request line
+  bool overlong_ = false;  // inside a line already longer than kMaxLine
 };
 
 /// The 6x6 pose covariance [position, rotation] from the filter's 15x15 error-state covariance
