@@ -104,6 +104,10 @@ void capture_seeds(SeedWriter& out, const std::string& name, const std::vector<P
   out.write("fuzz_rs_helios", name + "-difop-first", helios_stream(model | kDifopAngles, split, arrival, difop_first));
   out.write("fuzz_rs_helios", name + "-table-arrival-time",
             helios_stream(model | kTableAngles | kArrivalTime, split | 0x80, arrival, msop_only));
+  // Arrival times that leave the decoder's time range in mid-stream.
+  constexpr auto kLastArrivalNs = static_cast<std::int64_t>(helios::kMaxTimestampSeconds) * 1'000'000'000LL;
+  out.write("fuzz_rs_helios", name + "-arrival-time-limit",
+            helios_stream(model | kTableAngles | kArrivalTime, split, kLastArrivalNs - 1'000'000, msop_only));
   if (!model_16p)
     out.write("fuzz_rs_helios", name + "-forced-dual", helios_stream(kForceDual | kTableAngles, 0, arrival, msop_only));
 

@@ -148,6 +148,11 @@ MsopStatus MsopDecoder::decode(std::span<const std::uint8_t> payload, bool dual,
   const std::uint32_t micros = load_be32(p + 26);
   if (micros >= 1'000'000 || seconds > kMaxTimestampSeconds) return MsopStatus::BadTimestamp;
   header.time_ns = static_cast<std::int64_t>(seconds) * 1'000'000'000LL + static_cast<std::int64_t>(micros) * 1000LL;
+  // The arrival clock gets the same bound: a capture file's times are only what the file says, and
+  // beyond it the packet and sweep time arithmetic would overflow.
+  constexpr std::int64_t kMaxTimeNs = static_cast<std::int64_t>(kMaxTimestampSeconds) * 1'000'000'000LL;
+  if (options_.time_source == TimeSource::ArrivalTime && (arrival_ns < 0 || arrival_ns > kMaxTimeNs))
+    return MsopStatus::BadTimestamp;
   if (!has_angles_) return MsopStatus::NoCalibration;
 
   // §2.1: stop at the first block without its FF EE flag. The blocks before it carry their own

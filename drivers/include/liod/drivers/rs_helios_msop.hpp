@@ -27,7 +27,8 @@ enum class MsopStatus : std::uint8_t {
   Partial,          ///< a broken block flag cut the packet; the blocks before it were decoded
   WrongSize,        ///< payload is not 1248 bytes
   BadMagic,         ///< not 55 AA 05 5A
-  BadTimestamp,     ///< microseconds field >= 1e6, or seconds beyond helios::kMaxTimestampSeconds
+  BadTimestamp,     ///< microseconds field >= 1e6, or seconds beyond helios::kMaxTimestampSeconds;
+                    ///< with TimeSource::ArrivalTime also an arrival time outside 0 .. that bound
   BadAzimuth,       ///< a block azimuth >= 36000
   BrokenFirstBlock, ///< block 0 has no FF EE flag: nothing to decode
   NoCalibration,    ///< no angle table yet (rs_driver's wait_for_difop)
