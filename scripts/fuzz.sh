@@ -5,8 +5,9 @@
 #   scripts/fuzz.sh [seconds-per-target (60)] [build-dir (build-fuzz)]
 #
 # Fails when any target crashes, leaks, hangs (one input > 10 s), allocates more than 256 MB at
-# once (the inputs are a few KB) or breaks one of its checks; the input that did it is kept as <build-dir>/fuzz-runs/<target>/{crash,leak,timeout,oom}-<hash>
-# (replay it with <build-dir>/bin/<target> FILE), next to the target's full log.
+# once (the inputs are a few KB) or breaks one of its checks. The input that did it is kept as
+# <build-dir>/fuzz-runs/<target>/{crash,leak,timeout,oom}-<hash>, next to the target's full log;
+# replay it with <build-dir>/bin/<target> FILE.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-60}
