@@ -12,7 +12,11 @@ packages=(
   libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev libstb-dev
   python3
+  clang
 )
+# libFuzzer and the sanitizer runtimes for clang (scripts/fuzz.sh): their own package on Debian 12,
+# part of clang's packages on Ubuntu 22.04.
+if grep -qx 'ID=debian' /etc/os-release 2>/dev/null; then packages+=(libclang-rt-dev); fi
 
 missing=()
 for p in "${packages[@]}"; do

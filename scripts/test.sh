@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs liod's whole test suite from a fresh clone: installs what is missing, builds the decoding
-# and algorithm tests with AddressSanitizer + UndefinedBehaviorSanitizer and runs them, then
-# builds the Release tree (tests, tools, benchmarks) and runs every test.
+# and algorithm tests with AddressSanitizer + UndefinedBehaviorSanitizer and runs them, fuzzes
+# every parser of outside bytes briefly, then builds the Release tree (tests, tools, benchmarks)
+# and runs every test.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
@@ -21,6 +22,9 @@ cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIOD_SANITIZE=threa
 cmake --build build-tsan -j"$jobs" --target test_daemon liod-sim  # liod-sim: the drive the pipeline tests use
 (cd build-tsan && TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
    ctest --output-on-failure -j"$jobs" -L test_daemon -R 'SpscRing|PoseSocket|PoseProtocol|StuckClient|UdpLidar|SerialImu|AnchorExchange|ClockJump')
+
+# libFuzzer: a short run of every fuzz target (scripts/fuzz.sh 60 is the long run).
+bash scripts/fuzz.sh 10
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$jobs"

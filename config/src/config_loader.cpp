@@ -113,6 +113,7 @@ class Schema {
         bool have_id = false;
         bool have_quantity = false;
         for (const auto& f : e) {
+          if (!f.first.IsScalar()) fail(Source{src.file, k, f.first}, "keys must be plain names");
           const std::string name = f.first.as<std::string>();
           const Source fs{src.file, k + "." + name, f.second};
           auto u32 = [&](std::uint32_t limit) {
@@ -347,6 +348,9 @@ void apply(const Schema& schema, const YAML::Node& node, const std::string& pref
     fail(src, "must be a mapping of keys");
   }
   for (const auto& entry : node) {
+    if (!entry.first.IsScalar()) {  // YAML's "? [a, b]: ..." complex keys name nothing liod knows
+      fail(Source{file, prefix.empty() ? "<top level>" : prefix, entry.first}, "keys must be plain names");
+    }
     const std::string key = prefix.empty() ? entry.first.as<std::string>() : prefix + "." + entry.first.as<std::string>();
     const YAML::Node& value = entry.second;
     if (const Setter* setter = schema.find(key)) {

@@ -53,6 +53,14 @@ void json_array(std::string& s, const double* v, int n) {
   s += ']';
 }
 
+void apply_request(std::string_view req, ClientMode& mode) {
+  while (!req.empty() && (req.back() == '\r' || req.back() == ' ')) req.remove_suffix(1);
+  if (req == "json") mode.json = true;
+  else if (req == "binary") mode.json = false;
+  else if (req == "scan") mode.scan_only = true;
+  else if (req == "all") mode.scan_only = false;
+}
+
 }  // namespace
 
 void encode(const PoseMessage& m, std::vector<std::uint8_t>& out) {
@@ -159,6 +167,24 @@ DecodeStatus decode(std::span<const std::uint8_t> b, Message& out, std::size_t& 
   }
   consumed = length;
   return DecodeStatus::Ok;
+}
+
+void RequestReader::feed(std::string_view bytes, ClientMode& mode) {
+  while (!bytes.empty()) {
+    const std::size_t nl = bytes.find('\n');
+    if (!overlong_) {
+      line_.append(bytes.substr(0, nl));
+      if (line_.size() > kMaxLine) {  // not a request: skip to its end rather than grow, and never
+        line_.clear();                // take its tail for one (that would depend on the chunking)
+        overlong_ = true;
+      }
+    }
+    if (nl == std::string_view::npos) return;
+    if (!overlong_) apply_request(line_, mode);
+    line_.clear();
+    overlong_ = false;
+    bytes.remove_prefix(nl + 1);
+  }
 }
 
 Eigen::Matrix<double, 6, 6> pose_covariance_from_state(const Eigen::Matrix<double, 15, 15>& s) {

@@ -117,18 +117,7 @@ void PoseServer::read_requests(Client& c) {
       c.fd = -1;
       return;
     }
-    c.line.append(buf, static_cast<std::size_t>(n));
-    std::size_t nl;
-    while ((nl = c.line.find('\n')) != std::string::npos) {
-      std::string req = c.line.substr(0, nl);
-      c.line.erase(0, nl + 1);
-      while (!req.empty() && (req.back() == '\r' || req.back() == ' ')) req.pop_back();
-      if (req == "json") c.json = true;
-      else if (req == "binary") c.json = false;
-      else if (req == "scan") c.scan_only = true;
-      else if (req == "all") c.scan_only = false;
-    }
-    if (c.line.size() > 1024) c.line.clear();  // not a request: ignore rather than grow
+    c.requests.feed(std::string_view(buf, static_cast<std::size_t>(n)), c.mode);
   }
 }
 
@@ -177,8 +166,8 @@ void PoseServer::broadcast(const pose::PoseMessage& message) {
   std::string json;
   for (std::size_t i = clients_.size(); i-- > 0;) {
     Client& c = clients_[i];
-    if (c.scan_only && m.type != pose::MessageType::ScanPose) continue;
-    if (c.json) {
+    if (c.mode.scan_only && m.type != pose::MessageType::ScanPose) continue;
+    if (c.mode.json) {
       if (json.empty()) json = pose::to_json_line(m);
       queue(c, reinterpret_cast<const std::uint8_t*>(json.data()), json.size());
     } else {
@@ -196,7 +185,7 @@ void PoseServer::broadcast_health(const std::string& body) {
   const std::string line = "{\"type\":\"health\",\"health\":" + body + "}\n";
   for (std::size_t i = clients_.size(); i-- > 0;) {
     Client& c = clients_[i];
-    if (c.json) queue(c, reinterpret_cast<const std::uint8_t*>(line.data()), line.size());
+    if (c.mode.json) queue(c, reinterpret_cast<const std::uint8_t*>(line.data()), line.size());
     else queue(c, binary_.data(), binary_.size());
     flush(c);
     if (c.fd < 0) close_client(i);

@@ -137,6 +137,16 @@ std::optional<ImuSample> CanImuDecoder::feed_table(const CanFrame& f) {
   return s;
 }
 
+CanFrame from_socketcan(const can_frame& raw, std::int64_t time_ns) noexcept {
+  CanFrame f;
+  f.extended = (raw.can_id & CAN_EFF_FLAG) != 0;
+  f.id = raw.can_id & (f.extended ? CAN_EFF_MASK : CAN_SFF_MASK);
+  f.dlc = std::min<std::uint8_t>(raw.can_dlc, 8);
+  std::memcpy(f.data.data(), raw.data, 8);
+  f.time_ns = time_ns;
+  return f;
+}
+
 CanFrame make_j1939_rate_frame(const Eigen::Vector3d& w, std::uint8_t sa, std::int64_t t) {
   const double k = 1.0 / kDegToRad;
   return j1939_frame(CanImuDecoder::kPgnAngularRate, sa,
@@ -185,23 +195,20 @@ bool SocketCan::read(CanFrame& out, int timeout_ms) {
   h.msg_controllen = sizeof control;
   const ssize_t n = ::recvmsg(fd_, &h, MSG_DONTWAIT);
   if (n != static_cast<ssize_t>(sizeof frame)) return false;
-  out.extended = (frame.can_id & CAN_EFF_FLAG) != 0;
-  out.id = frame.can_id & (out.extended ? CAN_EFF_MASK : CAN_SFF_MASK);
-  out.dlc = std::min<std::uint8_t>(frame.can_dlc, 8);
-  std::memcpy(out.data.data(), frame.data, 8);
-  out.time_ns = 0;
+  std::int64_t time_ns = 0;
   for (cmsghdr* c = CMSG_FIRSTHDR(&h); c != nullptr; c = CMSG_NXTHDR(&h, c)) {
     if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
       timespec ts{};
       std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
-      out.time_ns = static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+      time_ns = static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
     }
   }
-  if (out.time_ns == 0) {
+  if (time_ns == 0) {
     timespec ts{};
     ::clock_gettime(CLOCK_REALTIME, &ts);
-    out.time_ns = static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+    time_ns = static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
   }
+  out = from_socketcan(frame, time_ns);
   return true;
 }
 

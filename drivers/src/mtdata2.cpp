@@ -111,11 +111,15 @@ bool MtData2Parser::decode_payload(std::span<const std::uint8_t> d, MtData2Sampl
       case kSampleTimeFine:
         if (size == 4) out.sample_time_fine = load_be32(p);
         break;
+      // A NaN or infinity here is corruption the 8-bit checksum let through (1 in 256 corrupt
+      // messages pass it); handed on, it would poison the filter state for good.
       case kRateOfTurn:
         if (size == 12) out.rate_of_turn = vec3(p);
+        if (out.rate_of_turn && !out.rate_of_turn->allFinite()) return false;
         break;
       case kAcceleration:
         if (size == 12) out.acceleration = vec3(p);
+        if (out.acceleration && !out.acceleration->allFinite()) return false;
         break;
       default:
         break;  // FreeAcceleration and everything else: skipped by size

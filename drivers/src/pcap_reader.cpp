@@ -20,8 +20,9 @@ constexpr std::uint32_t kNgInterfaceDescription = 1;
 constexpr std::uint32_t kNgObsoletePacket = 2;
 constexpr std::uint32_t kNgSimplePacket = 3;
 constexpr std::uint32_t kNgEnhancedPacket = 6;
-// No link layer we parse carries frames this large; a bigger length means a corrupt file, and
-// refusing it keeps a corrupt length field from allocating gigabytes.
+// No link layer we parse carries frames this large (an IPv4 datagram is at most 64 KiB); a bigger
+// length means a corrupt file, and refusing it keeps a corrupt length field from allocating
+// gigabytes. The limit holds whatever snaplen a classic file's header claims, as in Wireshark.
 constexpr std::uint32_t kMaxRecordBytes = 256 * 1024;
 constexpr std::uint32_t kMaxBlockBytes = kMaxRecordBytes + 4096;
 
@@ -46,7 +47,8 @@ struct NgInterface {
       std::uint64_t frac = k >= 64 ? units : units & ((std::uint64_t{1} << k) - 1);
       unsigned shift = k;
       if (shift > 30) {  // keep frac * 1e9 inside 64 bits
-        frac >>= (shift - 30);
+        const unsigned drop = shift - 30;
+        frac = drop >= 64 ? 0 : frac >> drop;  // at 2^-94 s per unit or finer, any count is < 1 ns
         shift = 30;
       }
       ns = whole * 1'000'000'000ULL + ((frac * 1'000'000'000ULL) >> shift);
@@ -75,7 +77,6 @@ struct PcapReader::Impl {
   // classic pcap
   bool nanosecond_stamps = false;
   std::uint32_t link_type = 0;
-  std::uint32_t snaplen = 0;
   // pcapng
   std::vector<NgInterface> interfaces;
 
@@ -162,7 +163,6 @@ void PcapReader::Impl::open_classic(const std::uint8_t* header) {
   nanosecond_stamps = load32(header, big_endian) == kPcapMagicNanos;
   const std::uint16_t major = load16(header + 4, big_endian);
   if (major != 2) throw InputError(path, 0, "unsupported pcap version " + std::to_string(major));
-  snaplen = load32(header + 16, big_endian);
   // The top bits of the link-type word carry FCS information (pcap spec "LinkType and
   // additional information"); any FCS lies after the IP datagram and is ignored anyway.
   link_type = load32(header + 20, big_endian) & 0x03FFFFFFu;
@@ -172,7 +172,6 @@ void PcapReader::Impl::open_classic(const std::uint8_t* header) {
 }
 
 bool PcapReader::Impl::next_classic(UdpDatagram& out) {
-  const std::uint32_t record_limit = std::max(snaplen, kMaxRecordBytes);
   for (;;) {
     const std::uint64_t start = offset;
     std::uint8_t rh[16];
@@ -189,10 +188,10 @@ bool PcapReader::Impl::next_classic(UdpDatagram& out) {
     const std::uint32_t ts_frac = load32(rh + 4, big_endian);
     const std::uint32_t caplen = load32(rh + 8, big_endian);
     const std::uint32_t origlen = load32(rh + 12, big_endian);
-    if (caplen > record_limit) {
+    if (caplen > kMaxRecordBytes) {
       ++stats.malformed;
       stop("corrupt record header at byte " + std::to_string(start) + " (captured length " +
-           std::to_string(caplen) + " exceeds " + std::to_string(record_limit) + "); stopped reading");
+           std::to_string(caplen) + " exceeds " + std::to_string(kMaxRecordBytes) + "); stopped reading");
       return false;
     }
     if (buffer.size() < caplen) buffer.resize(caplen);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include "liod/drivers/byte_order.hpp"
 #include "liod/drivers/input_error.hpp"
@@ -37,14 +38,22 @@ constexpr std::int32_t kFullCircle = kAzimuthUnits;
   return a;
 }
 
+const std::vector<std::array<float, 2>>& azimuth_trig() {
+  static const std::vector<std::array<float, 2>> table = [] {
+    std::vector<std::array<float, 2>> t(kFullCircle);
+    for (std::int32_t a = 0; a < kFullCircle; ++a) {
+      const double rad = a * 0.01 * std::numbers::pi / 180.0;
+      t[static_cast<std::size_t>(a)] = {static_cast<float>(std::cos(rad)), static_cast<float>(std::sin(rad))};
+    }
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace
 
 MsopDecoder::MsopDecoder(HeliosModel model, MsopDecoderOptions options)
-    : model_(model), options_(options), trig_(kFullCircle) {
-  for (std::int32_t a = 0; a < kFullCircle; ++a) {
-    const double rad = a * 0.01 * std::numbers::pi / 180.0;
-    trig_[static_cast<std::size_t>(a)] = {static_cast<float>(std::cos(rad)), static_cast<float>(std::sin(rad))};
-  }
+    : model_(model), options_(options), trig_(azimuth_trig()) {
   build_slot_tables();
   set_rotation_hz(kDefaultRotationHz);
 }
@@ -139,6 +148,11 @@ MsopStatus MsopDecoder::decode(std::span<const std::uint8_t> payload, bool dual,
   const std::uint32_t micros = load_be32(p + 26);
   if (micros >= 1'000'000 || seconds > kMaxTimestampSeconds) return MsopStatus::BadTimestamp;
   header.time_ns = static_cast<std::int64_t>(seconds) * 1'000'000'000LL + static_cast<std::int64_t>(micros) * 1000LL;
+  // The arrival clock gets the same bound: a capture file's times are only what the file says, and
+  // beyond it the packet and sweep time arithmetic would overflow.
+  constexpr std::int64_t kMaxTimeNs = static_cast<std::int64_t>(kMaxTimestampSeconds) * 1'000'000'000LL;
+  if (options_.time_source == TimeSource::ArrivalTime && (arrival_ns < 0 || arrival_ns > kMaxTimeNs))
+    return MsopStatus::BadTimestamp;
   if (!has_angles_) return MsopStatus::NoCalibration;
 
   // §2.1: stop at the first block without its FF EE flag. The blocks before it carry their own

@@ -80,6 +80,22 @@ TEST(ConfigLoader, LaterFilesOverrideEarlierOnes) {
   EXPECT_NEAR(x_in_imu.y(), 1.0, 1e-9);  // a 90 degree yaw
 }
 
+// Found by fuzz_config: a complex key ("? ..." or "[a, b]: ...") made yaml-cpp throw its own
+// bad-conversion exception instead of a ConfigError naming the file and key (so the daemon
+// exited with a generic error and a message without the file name).
+TEST(ConfigLoader, ComplexKeysAreConfigErrors) {
+  const std::string fuzz_input = "#R lost\">\nlai-mu:\n ?  transport: serial  z     9 # senablerue\n";
+  auto msg = error_of(fuzz_input);
+  EXPECT_NE(msg.find("test.yaml:3"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("key 'lai-mu'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("keys must be plain names"), std::string::npos) << msg;
+  msg = error_of("[a, b]: 1\n");
+  EXPECT_NE(msg.find("key '<top level>'"), std::string::npos) << msg;
+  msg = error_of("drivers:\n  imu:\n    can_signals:\n      - {quantity: gyro_x, id: 1, [x]: 2}\n");
+  EXPECT_NE(msg.find("drivers.imu.can_signals[0]"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("keys must be plain names"), std::string::npos) << msg;
+}
+
 TEST(ConfigLoader, MissingFileAndBrokenYamlAreReported) {
   try {
     liod::load_config({"/nonexistent/liod.yaml"});

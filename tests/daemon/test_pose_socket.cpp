@@ -3,7 +3,9 @@
 #include <poll.h>
 
 #include <atomic>
+#include <string>
 #include <thread>
+#include <utility>
 
 #include "liod/daemon/pose_client.hpp"
 #include "liod/daemon/pose_protocol.hpp"
@@ -76,6 +78,38 @@ TEST(PoseProtocol, CovarianceReordersFilterBlocks) {
   EXPECT_EQ(c(0, 0), 5.0);
   EXPECT_EQ(c(3, 3), 2.0);
   EXPECT_EQ(c(0, 3), 0.7);
+}
+
+TEST(PoseProtocol, RequestLinesInAnyChunking) {
+  const std::string bytes = "junk\njson\r\nscan  \nbinary\nscan\n";
+  for (std::size_t piece : {std::size_t{1}, std::size_t{3}, bytes.size()}) {
+    pose::ClientMode mode;
+    pose::RequestReader reader;
+    for (std::size_t i = 0; i < bytes.size(); i += piece) reader.feed(std::string_view(bytes).substr(i, piece), mode);
+    EXPECT_FALSE(mode.json) << "pieces of " << piece;
+    EXPECT_TRUE(mode.scan_only) << "pieces of " << piece;
+  }
+}
+
+// Found by fuzz_pose_socket: a line over the length limit was dropped when a piece ended past the
+// limit, and the rest of it then read as a line of its own: "<garbage>json" switched the client to
+// JSON or not depending on where recv() happened to cut the bytes.
+TEST(PoseProtocol, RequestAtTheEndOfAnOverlongLineIsIgnored) {
+  const std::pair<std::size_t, std::size_t> garbage_and_piece[] = {{1025, 1}, {1280, 256}, {1280, 1285}};
+  for (const auto& [garbage, piece] : garbage_and_piece) {
+    const std::string overlong = std::string(garbage, 'x') + "json\n";
+    pose::ClientMode mode;
+    pose::RequestReader reader;
+    for (std::size_t i = 0; i < overlong.size(); i += piece) reader.feed(std::string_view(overlong).substr(i, piece), mode);
+    EXPECT_FALSE(mode.json) << "pieces of " << piece;
+    reader.feed("json\n", mode);  // the next line is read normally
+    EXPECT_TRUE(mode.json) << "pieces of " << piece;
+  }
+  // The longest line still read as a request: kMaxLine bytes with trailing spaces.
+  pose::ClientMode mode;
+  pose::RequestReader reader;
+  reader.feed("json" + std::string(pose::RequestReader::kMaxLine - 4, ' ') + "\n", mode);
+  EXPECT_TRUE(mode.json);
 }
 
 TEST(PoseSocket, ServesBinaryAndJsonClients) {

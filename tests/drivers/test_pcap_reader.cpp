@@ -109,6 +109,21 @@ TEST(PcapReader, PcapNgDecodesIdenticallyToClassic) {
   }
 }
 
+// Found by fuzz_pcap_reader: an if_tsresol of 2^-127 s (any exponent past 93) shifted a 64-bit
+// value by 64 or more bits, which is undefined behaviour. Such units are all below a nanosecond.
+TEST(PcapReader, PcapNgFinestPowerOfTwoResolutionIsDefined) {
+  test::TempDir dir;
+  const auto data = synthetic_datagrams(3);
+  for (const int resolution : {0x80 | 94, 0x80 | 127}) {
+    auto bytes = test::pcapng(ethernet_records(data), 1);
+    bytes[28 + 20] = static_cast<std::uint8_t>(resolution);  // the IDB's if_tsresol value: SHB (28 bytes), IDB header (16), option header (4)
+    test::write_bytes(dir / "fine.pcapng", bytes);
+    const auto got = read_all(dir / "fine.pcapng");
+    ASSERT_EQ(got.size(), data.size());
+    for (const Datagram& d : got) EXPECT_EQ(d.time_ns, 0) << "if_tsresol 0x" << std::hex << resolution;
+  }
+}
+
 TEST(PcapReader, VlanSllSll2AndRawIpFramesYieldTheSameDatagrams) {
   test::TempDir dir;
   const auto data = synthetic_datagrams(5);
@@ -251,6 +266,21 @@ TEST(PcapReader, CorruptRecordLengthStopsWithoutHugeAllocation) {
   PcapReader reader(dir / "corrupt.pcap");
   EXPECT_EQ(read_all(reader).size(), 1U);
   EXPECT_NE(reader.error().find("corrupt record header"), std::string::npos) << reader.error();
+}
+
+// Found by fuzz_pcap_reader: a file header claiming a huge snaplen lifted that limit, so a corrupt
+// record length had the reader allocate and zero-fill up to 4 GiB before its read came up short.
+TEST(PcapReader, HugeSnaplenDoesNotLiftTheRecordLengthLimit) {
+  test::TempDir dir;
+  auto bytes = test::classic_pcap(ethernet_records(synthetic_datagrams(3)), 1);
+  store_le32(bytes.data() + 16, 0xFFFFFFFF);  // snaplen
+  const std::size_t frame0 = test::udp_ethernet_frame(6699, std::vector<std::uint8_t>(100)).size();
+  store_le32(bytes.data() + 24 + 16 + frame0 + 8, 587'323'939);  // the fuzzer's captured length
+  test::write_bytes(dir / "corrupt.pcap", bytes);
+  PcapReader reader(dir / "corrupt.pcap");
+  EXPECT_EQ(read_all(reader).size(), 1U);
+  EXPECT_NE(reader.error().find("corrupt record header"), std::string::npos) << reader.error();
+  EXPECT_EQ(reader.stats().malformed, 1U);
 }
 
 TEST(PcapReader, RandomCorruptionNeverCrashes) {

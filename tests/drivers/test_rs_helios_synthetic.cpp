@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <set>
@@ -261,6 +262,29 @@ TEST(RsHeliosSynthetic, BadPacketsAreCountedNotFatal) {
   EXPECT_EQ(s.broken_first_block, 1U);
   EXPECT_EQ(s.rejected(), 8U);
   EXPECT_EQ(s.msop, 0U);
+}
+
+// Found with fuzz_rs_helios (a seed given extreme arrival times): on the arrival-time clock, a
+// capture time near the int64 limits (a pcapng's timestamps can say anything) overflowed the packet
+// time arithmetic, undefined behaviour. Such packets are now refused as bad timestamps.
+TEST(RsHeliosSynthetic, ArrivalTimesOutsideTheTimestampRangeAreRefused) {
+  HeliosOptions o;
+  o.angles = table_5515();
+  o.msop.time_source = TimeSource::ArrivalTime;
+  std::vector<double> sweep_starts;
+  RsHeliosDecoder dec(o, [&](Scan& scan, const SweepInfo&) { sweep_starts.push_back(scan.start_time); });
+  const auto packet = test::make_msop(1'700'000'000'000'000LL, 1, varied_blocks(35900, false));
+  constexpr std::int64_t kMaxNs = static_cast<std::int64_t>(helios::kMaxTimestampSeconds) * 1'000'000'000LL;
+  for (const std::int64_t arrival : {std::numeric_limits<std::int64_t>::min() + 5, std::int64_t{-1}, kMaxNs + 1,
+                                     std::numeric_limits<std::int64_t>::max() - 16})
+    EXPECT_EQ(dec.feed(packet, arrival), PacketKind::Rejected) << arrival;
+  EXPECT_EQ(dec.stats().bad_timestamp, 4U);
+  // The bounds themselves are accepted, and a step from one to an ordinary time is just a gap.
+  EXPECT_EQ(dec.feed(packet, kMaxNs), PacketKind::Msop);
+  EXPECT_EQ(dec.feed(packet, 1'700'000'000'000'000'000LL), PacketKind::Msop);
+  EXPECT_EQ(dec.stats().time_gaps, 1U);
+  ASSERT_FALSE(sweep_starts.empty());
+  for (const double t : sweep_starts) EXPECT_TRUE(std::isfinite(t));
 }
 
 TEST(RsHeliosSynthetic, BrokenBlockFlagKeepsTheBlocksBeforeIt) {

@@ -1,6 +1,7 @@
 #pragma once
-// Builders shared by the driver tests and the benchmark: synthetic RS-Helios packets laid out per
-// shared/sensors/rs-helios.md, and capture files of every flavour PcapReader accepts.
+// Builders shared by the driver tests, the benchmark and the fuzz seed writer (fuzz/make_seeds.cpp):
+// synthetic RS-Helios packets laid out per shared/sensors/rs-helios.md, and capture files of every
+// flavour PcapReader accepts.
 
 #include <unistd.h>
 

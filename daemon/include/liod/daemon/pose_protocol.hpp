@@ -32,6 +32,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace liod::pose {
@@ -87,6 +88,26 @@ enum class DecodeStatus { Ok, NeedMore, Invalid };
 /// Decodes the message at the front of `bytes`; on Ok `consumed` is its length. Invalid means the
 /// stream is not (or no longer) a liod v1 stream: wrong magic, version or length.
 DecodeStatus decode(std::span<const std::uint8_t> bytes, Message& out, std::size_t& consumed);
+
+/// What a client has asked for with its request lines.
+struct ClientMode {
+  bool json = false;       ///< "json": one JSON object per line; "binary": binary messages
+  bool scan_only = false;  ///< "scan": scan-rate poses only; "all": both rates
+};
+
+/// Turns the bytes a client sends, in whatever pieces they arrive, into request lines applied to
+/// a ClientMode. Trailing '\r' and spaces are ignored; unknown lines are ignored.
+class RequestReader {
+ public:
+  /// A line longer than this is not a request: it is dropped whole, up to its newline, without
+  /// being buffered.
+  static constexpr std::size_t kMaxLine = 1024;
+  void feed(std::string_view bytes, ClientMode& mode);
+
+ private:
+  std::string line_;       // partial request line
+  bool overlong_ = false;  // inside a line already longer than kMaxLine
+};
 
 /// The 6x6 pose covariance [position, rotation] from the filter's 15x15 error-state covariance
 /// ordered [rotation, position, velocity, gyro bias, accel bias].

@@ -50,11 +50,10 @@ class PoseServer {
  private:
   struct Client {
     int fd = -1;
-    bool json = false;
-    bool scan_only = false;
+    pose::ClientMode mode;
+    pose::RequestReader requests;
     std::vector<std::uint8_t> out;  // bytes queued, whole messages only
     std::size_t sent = 0;           // bytes of `out` already written
-    std::string line;               // partial request line
     std::chrono::steady_clock::time_point last_progress;
   };
   void accept_clients();

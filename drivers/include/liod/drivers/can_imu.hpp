@@ -25,6 +25,8 @@
 #include "liod/config.hpp"
 #include "liod/types.hpp"
 
+struct can_frame;  // <linux/can.h>
+
 namespace liod::drivers {
 
 struct CanFrame {
@@ -71,6 +73,10 @@ class CanImuDecoder {
   bool have_accel_ = false;
   std::array<double, 6> values_{};  // table profile: latest value per quantity
 };
+
+/// A frame as SocketCAN delivers it, received at `time_ns`: the EFF/RTR/ERR flags split off the
+/// identifier, the length clamped to the 8 data bytes of a classic frame.
+CanFrame from_socketcan(const can_frame& raw, std::int64_t time_ns) noexcept;
 
 /// Builds J1939 frames (for tests and simulators).
 CanFrame make_j1939_rate_frame(const Eigen::Vector3d& rate_rad_s, std::uint8_t source_address, std::int64_t time_ns);

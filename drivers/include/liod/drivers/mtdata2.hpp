@@ -42,7 +42,7 @@ struct MtParserStats {
   std::uint64_t messages = 0;          ///< valid MTData2 messages
   std::uint64_t other_messages = 0;    ///< valid Xbus messages with another MID (acks, errors)
   std::uint64_t bad_checksum = 0;
-  std::uint64_t malformed = 0;         ///< checksum fine but item sizes do not add up
+  std::uint64_t malformed = 0;         ///< checksum fine but item sizes do not add up or a value is NaN/inf
   std::uint64_t skipped_bytes = 0;     ///< bytes discarded while looking for a preamble
   std::uint64_t counter_gaps = 0;      ///< samples missing per PacketCounter
 };

@@ -6,7 +6,6 @@
 #include <array>
 #include <cstdint>
 #include <span>
-#include <vector>
 
 #include "liod/drivers/packet_points.hpp"
 #include "liod/drivers/rs_helios_model.hpp"
@@ -28,7 +27,8 @@ enum class MsopStatus : std::uint8_t {
   Partial,          ///< a broken block flag cut the packet; the blocks before it were decoded
   WrongSize,        ///< payload is not 1248 bytes
   BadMagic,         ///< not 55 AA 05 5A
-  BadTimestamp,     ///< microseconds field >= 1e6, or seconds beyond helios::kMaxTimestampSeconds
+  BadTimestamp,     ///< microseconds field >= 1e6, or seconds beyond helios::kMaxTimestampSeconds;
+                    ///< with TimeSource::ArrivalTime also an arrival time outside 0 .. that bound
   BadAzimuth,       ///< a block azimuth >= 36000
   BrokenFirstBlock, ///< block 0 has no FF EE flag: nothing to decode
   NoCalibration,    ///< no angle table yet (rs_driver's wait_for_difop)
@@ -104,8 +104,9 @@ class MsopDecoder {
   std::array<LaserEntry, 32> lasers_{};
   std::array<std::uint16_t, 32> rings_{};
   /// cos/sin of every azimuth in 0.01° steps: the decoders this one is checked against quantise
-  /// azimuth the same way, and it keeps trigonometry out of the per-point loop.
-  std::vector<std::array<float, 2>> trig_;
+  /// azimuth the same way, and it keeps trigonometry out of the per-point loop. One table, built
+  /// once and shared by every decoder.
+  std::span<const std::array<float, 2>> trig_;
 };
 
 }  // namespace liod::drivers
