@@ -415,14 +415,4 @@ void LidarInertialOdometry::add_keyframe(const Features& features) {
   }
 }
 
-std::optional<NavState> LidarInertialOdometry::propagated_state() const {
-  if (!initialized_ || imu_.empty() || imu_.back().time <= state_.time) return std::nullopt;
-  const auto intervals = imu_intervals(imu_, state_.time, imu_.back().time);
-  ImuPreintegration preintegration(state_.gyro_bias, state_.accel_bias, noise_);
-  for (const auto& iv : intervals) preintegration.integrate(iv.gyro, iv.accel, iv.dt);
-  NavState out = preintegration.predict(state_, gravity_);
-  out.time = imu_.back().time;
-  return out;
-}
-
 }  // namespace liod

@@ -69,8 +69,6 @@ class LidarInertialOdometry {
   /// data around the scan). Points must carry per-point times.
   std::optional<OdometryResult> process(const Scan& scan);
 
-  /// The latest state propagated with the IMU up to the newest sample (IMU-rate output).
-  std::optional<NavState> propagated_state() const;
   /// The gravity vector in the world frame the states are propagated with.
   const Eigen::Vector3d& gravity() const { return gravity_; }
 
