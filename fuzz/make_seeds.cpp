@@ -119,21 +119,6 @@ void capture_seeds(SeedWriter& out, const std::string& name, const std::vector<P
 }
 
 // ---- fuzz_mtdata2 ---------------------------------------------------------------------------------
-Bytes xbus(std::uint8_t mid, const Bytes& data) {
-  Bytes m{xsens::kPreamble, xsens::kBusId, mid};
-  if (data.size() < 0xFF) {
-    m.push_back(static_cast<std::uint8_t>(data.size()));
-  } else {
-    m.push_back(0xFF);
-    m.push_back(static_cast<std::uint8_t>(data.size() >> 8));
-    m.push_back(static_cast<std::uint8_t>(data.size()));
-  }
-  m.insert(m.end(), data.begin(), data.end());
-  std::uint8_t sum = 0;
-  for (std::size_t i = 1; i < m.size(); ++i) sum = static_cast<std::uint8_t>(sum + m[i]);
-  m.push_back(static_cast<std::uint8_t>(0x100 - sum));
-  return m;
-}
 
 void mtdata2_seeds(SeedWriter& out) {
   Bytes stream;
@@ -146,20 +131,20 @@ void mtdata2_seeds(SeedWriter& out) {
 
   // Garbage, an acknowledgement (another MID), a FreeAcceleration item and a counter gap.
   Bytes mixed{0x00, xsens::kPreamble, 0x12, 0x34};
-  const Bytes ack = xbus(0x3F, {});
+  const Bytes ack = xsens::build_xbus_message(0x3F, {});
   mixed.insert(mixed.end(), ack.begin(), ack.end());
   Bytes data = xsens::build_mtdata2(7, 70000, Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, 9.81));
   data = Bytes(data.begin() + 4, data.end() - 1);  // the items alone
   data.insert(data.end(), {0x40, 0x30, 12});
   data.insert(data.end(), 12, 0);
-  const Bytes with_free = xbus(xsens::kMidMtData2, data);
+  const Bytes with_free = xsens::build_xbus_message(xsens::kMidMtData2, data);
   mixed.insert(mixed.end(), with_free.begin(), with_free.end());
   out.write("fuzz_mtdata2", "garbage-ack-free-acceleration", mixed);
 
   // Extended length: the same items plus an unknown 250-byte item.
   data.insert(data.end(), {0x70, 0x10, 250});
   data.insert(data.end(), 250, 0xAB);
-  out.write("fuzz_mtdata2", "extended-length", xbus(xsens::kMidMtData2, data));
+  out.write("fuzz_mtdata2", "extended-length", xsens::build_xbus_message(xsens::kMidMtData2, data));
 }
 
 // ---- fuzz_can_imu: struct can_frame + 2-byte µs delta --------------------------------------------

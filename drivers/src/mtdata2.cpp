@@ -129,19 +129,8 @@ bool MtData2Parser::decode_payload(std::span<const std::uint8_t> d, MtData2Sampl
   return true;
 }
 
-std::vector<std::uint8_t> build_mtdata2(std::uint16_t counter, std::uint32_t fine, const Eigen::Vector3d& gyro,
-                                        const Eigen::Vector3d& accel) {
-  std::vector<std::uint8_t> data;
-  std::uint8_t b[12];
-  store_be16(b, counter);
-  put_item(data, kPacketCounter, std::span(b, 2));
-  store_be32(b, fine);
-  put_item(data, kSampleTimeFine, std::span(b, 4));
-  for (int k = 0; k < 3; ++k) store_be32(b + 4 * k, std::bit_cast<std::uint32_t>(static_cast<float>(gyro[k])));
-  put_item(data, kRateOfTurn, std::span(b, 12));
-  for (int k = 0; k < 3; ++k) store_be32(b + 4 * k, std::bit_cast<std::uint32_t>(static_cast<float>(accel[k])));
-  put_item(data, kAcceleration, std::span(b, 12));
-  std::vector<std::uint8_t> m{kPreamble, kBusId, kMidMtData2};
+std::vector<std::uint8_t> build_xbus_message(std::uint8_t mid, const std::vector<std::uint8_t>& data) {
+  std::vector<std::uint8_t> m{kPreamble, kBusId, mid};
   if (data.size() < 0xFF) {
     m.push_back(static_cast<std::uint8_t>(data.size()));
   } else {
@@ -154,6 +143,21 @@ std::vector<std::uint8_t> build_mtdata2(std::uint16_t counter, std::uint32_t fin
   for (std::size_t i = 1; i < m.size(); ++i) sum = static_cast<std::uint8_t>(sum + m[i]);
   m.push_back(static_cast<std::uint8_t>(0x100 - sum));
   return m;
+}
+
+std::vector<std::uint8_t> build_mtdata2(std::uint16_t counter, std::uint32_t fine, const Eigen::Vector3d& gyro,
+                                        const Eigen::Vector3d& accel) {
+  std::vector<std::uint8_t> data;
+  std::uint8_t b[12];
+  store_be16(b, counter);
+  put_item(data, kPacketCounter, std::span(b, 2));
+  store_be32(b, fine);
+  put_item(data, kSampleTimeFine, std::span(b, 4));
+  for (int k = 0; k < 3; ++k) store_be32(b + 4 * k, std::bit_cast<std::uint32_t>(static_cast<float>(gyro[k])));
+  put_item(data, kRateOfTurn, std::span(b, 12));
+  for (int k = 0; k < 3; ++k) store_be32(b + 4 * k, std::bit_cast<std::uint32_t>(static_cast<float>(accel[k])));
+  put_item(data, kAcceleration, std::span(b, 12));
+  return build_xbus_message(kMidMtData2, data);
 }
 
 }  // namespace liod::drivers::xsens

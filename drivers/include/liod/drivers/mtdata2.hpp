@@ -65,6 +65,8 @@ class MtData2Parser {
 };
 
 /// Builds one MTData2 message (for tests and simulators): counter, fine time, gyro, accel.
+/// An Xbus message (preamble, bus id, message id, length, data, checksum) around `data`.
+std::vector<std::uint8_t> build_xbus_message(std::uint8_t mid, const std::vector<std::uint8_t>& data);
 std::vector<std::uint8_t> build_mtdata2(std::uint16_t counter, std::uint32_t sample_time_fine,
                                         const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel);
 
