@@ -427,7 +427,10 @@ void Pipeline::odometry_thread() {
           progress = true;
         }
         const bool imu_ended = !have_held && imu_ring_.drained();
-        if (odometry.latest_imu_time() >= end || imu_ended) {
+        // A held sample is past the scan's end: an IMU gap left nothing up to the end, and
+        // waiting for it would block both sources for good. Process now (flagged IMU gap).
+        const bool imu_passed = have_held && held.sample.time > end;
+        if (odometry.latest_imu_time() >= end || imu_passed || imu_ended) {
           process(pending.front());
           retire_front();
           progress = true;
