@@ -435,6 +435,9 @@ void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& resul
 }
 
 void LidarInertialOdometry::consider_keyframe(const Features& features, OdometryResult& result) {
+  // A scan too poor to register on the map (blinded or garbage returns) has nothing to add to it
+  // either; as a keyframe it would only push good keyframes out of the window.
+  if (result.status & kStatusFewFeatures) return;
   const auto& o = config_.odometry;
   if (keyframes_.empty()) {
     add_keyframe(features);
