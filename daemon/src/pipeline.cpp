@@ -123,6 +123,7 @@ void LidarOutput::on_sweep(Scan& scan) {
   const bool synced = difop.has_value() && difop->time_sync_status != 0;
   synced_.store(synced, std::memory_order_relaxed);
   std::int64_t offset = 0;
+  bool clock_off = false;
   switch (config_.time.lidar_clock) {
     case LidarClock::kSensor:
       break;
@@ -130,14 +131,21 @@ void LidarOutput::on_sweep(Scan& scan) {
       offset = offset_.offset_ns();
       break;
     case LidarClock::kAuto: {
-      // The sensor's time when it says it is synced; before its first DIFOP, when it agrees with
-      // the host anyway (both synced, or a recording whose capture times are the header times).
+      // The sensor's time when it says it is synced and agrees with the host; before its first
+      // DIFOP, when it agrees anyway (both synced, or a recording whose capture times are the
+      // header times). The IMU is stamped on the host clock, so a synced sensor that disagrees
+      // (its clock jumped, or the host lost sync) would put the scans at the wrong IMU time:
+      // its scans are timed on the host clock until it agrees again.
       const bool agrees = std::llabs(offset_.offset_ns()) < static_cast<std::int64_t>(config_.time.jump_threshold_s * 1e9);
-      const bool use_sensor = difop.has_value() ? synced : agrees;
+      const bool use_sensor = agrees && (!difop.has_value() || synced);
+      clock_off = synced && !agrees;
       offset = use_sensor ? 0 : offset_.offset_ns();
       break;
     }
   }
+  const std::uint64_t jumps = offset_.jumps();
+  item_.clock_jump = clock_off || jumps != jumps_at_last_sweep_;
+  jumps_at_last_sweep_ = jumps;
   offset_used_.store(offset, std::memory_order_relaxed);
   if (offset != 0) {
     const double o = static_cast<double>(offset) * 1e-9;
@@ -379,6 +387,7 @@ void Pipeline::odometry_thread() {
     last_scan_flags = status_flags(result->status);
     std::uint32_t f = last_scan_flags | live_flags();
     f &= ~static_cast<std::uint32_t>(pose::kLidarLost);  // this pose comes from a scan
+    if (item.clock_jump) f |= pose::kClockJump;
     ev.message.flags = with_ok(f);
     auto& d = ev.diagnostics;
     d.status = result->status;

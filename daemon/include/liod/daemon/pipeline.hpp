@@ -49,6 +49,7 @@ std::int64_t steady_ns() noexcept;
 struct ScanItem {
   Scan scan;
   std::int64_t ready_steady_ns = 0;  ///< when the packet completing the sweep arrived
+  bool clock_jump = false;           ///< the LiDAR clock jumped during the sweep, or is off (pose::kClockJump)
 };
 
 struct ImuItem {
@@ -134,6 +135,7 @@ class LidarOutput {
   drivers::HeliosStats stats_copy_;
   std::atomic<std::int64_t> heartbeat_{0};
   std::atomic<std::uint64_t> packets_{0}, lost_{0}, sweeps_{0}, jumps_{0};
+  std::uint64_t jumps_at_last_sweep_ = 0;
   std::atomic<std::int64_t> last_sweep_{0};
   std::atomic<std::int64_t> offset_used_{0};
   std::atomic<bool> synced_{false};

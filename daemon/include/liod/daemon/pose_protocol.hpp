@@ -52,7 +52,7 @@ enum Flag : std::uint32_t {
   kLidarLost = 1U << 4,     ///< no LiDAR sweep for longer than drivers.lidar.lost_after_s
   kKeyframe = 1U << 5,      ///< this scan became a keyframe
   kFewFeatures = 1U << 6,   ///< too few features for a reliable update
-  kClockJump = 1U << 7,     ///< a clock jump was detected in the last few seconds
+  kClockJump = 1U << 7,     ///< the LiDAR clock jumped during this scan, or a synced LiDAR disagrees with the host
 };
 
 struct PoseMessage {
