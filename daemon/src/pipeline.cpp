@@ -359,7 +359,9 @@ void Pipeline::odometry_thread() {
     fill_state(ev.message, *state);
     ev.message.angular_rate = item.sample.gyro - state->gyro_bias;
     ev.message.covariance = pose::pose_covariance_from_state(last_covariance);  // of the last scan update
-    std::uint32_t f = last_scan_flags & (pose::kDegenerate | pose::kFewFeatures);
+    // Propagated from the last scan's state: as (un)reliable as it. While it is initialising
+    // (a rolling start's speed is not known yet) these poses are not usable either.
+    std::uint32_t f = last_scan_flags & (pose::kInitializing | pose::kDegenerate | pose::kFewFeatures);
     if (std::isfinite(last_scan_end) && state->time - last_scan_end > lidar_lost_s) f |= pose::kLidarLost;
     ev.message.flags = with_ok(f | live_flags());
     ev.input_steady_ns = item.arrival_steady_ns;
