@@ -1,5 +1,6 @@
 #include "liod/lidar_inertial_odometry.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -53,6 +54,66 @@ std::vector<Eigen::Vector3d> transformed(const std::vector<Eigen::Vector3d>& poi
 }
 
 double velocity_std(const StateCovariance& p) { return std::sqrt(p.block<3, 3>(6, 6).diagonal().maxCoeff()); }
+
+struct TimeSpan {
+  double from = 0.0;
+  double to = 0.0;
+};
+
+// Where the IMU is silent within [from, to]: between consecutive samples more than max_gap apart,
+// and after the last sample when it ends more than max_gap before `to`.
+std::vector<TimeSpan> imu_gaps(const std::deque<ImuSample>& imu, double from, double to, double max_gap) {
+  std::vector<TimeSpan> gaps;
+  auto add = [&](double a, double b) {
+    a = std::max(a, from);
+    b = std::min(b, to);
+    if (b > a) gaps.push_back({a, b});
+  };
+  for (std::size_t i = 1; i < imu.size(); ++i) {
+    if (imu[i].time - imu[i - 1].time > max_gap) add(imu[i - 1].time, imu[i].time);
+  }
+  if (to - imu.back().time > max_gap) add(imu.back().time, to);
+  return gaps;
+}
+
+// Nothing was measured over an IMU gap. Holding the last sample there (one sample's vibration,
+// and the turn rate from before the gap, for seconds) smears the deskew and biases the
+// prediction, so the intervals in a gap carry the last estimated twist instead: constant body
+// velocity and angular rate, as an IMU would have measured them. Prediction and deskew use it alike.
+void bridge_imu_gaps(std::vector<ImuInterval>& intervals, const std::vector<TimeSpan>& gaps, const NavState& start,
+                     const Eigen::Vector3d& angular_rate, const Eigen::Vector3d& gravity) {
+  const Eigen::Vector3d v_body = start.rotation.transpose() * start.velocity;
+  const Eigen::Vector3d gyro = angular_rate + start.gyro_bias;
+  const Eigen::Vector3d accel = angular_rate.cross(v_body) - start.rotation.transpose() * gravity + start.accel_bias;
+  for (auto& iv : intervals) {
+    const double mid = iv.start_time + 0.5 * iv.dt;
+    for (const auto& gap : gaps) {
+      if (mid > gap.from && mid < gap.to) {
+        iv.gyro = gyro;
+        iv.accel = accel;
+        break;
+      }
+    }
+  }
+}
+
+// Even so the motion over a gap is a guess: the prior is widened by what a road vehicle may do
+// meanwhile (angular rate and acceleration changing by this much, 1 sigma), and the LiDAR decides.
+constexpr double kGapAngularRateStd = 0.5;   // rad/s
+constexpr double kGapAccelerationStd = 1.0;  // m/s^2
+
+void widen_for_imu_gaps(StateCovariance& p, const std::vector<TimeSpan>& gaps) {
+  double gap = 0.0;
+  for (const auto& g : gaps) gap += g.to - g.from;
+  const Eigen::Matrix3d i = Eigen::Matrix3d::Identity();
+  const double w = kGapAngularRateStd * gap;
+  const double a2 = kGapAccelerationStd * kGapAccelerationStd;
+  p.block<3, 3>(0, 0) += i * w * w;
+  p.block<3, 3>(3, 3) += i * a2 * std::pow(gap, 4) / 4.0;  // p += a t^2 / 2
+  p.block<3, 3>(3, 6) += i * a2 * std::pow(gap, 3) / 2.0;
+  p.block<3, 3>(6, 3) += i * a2 * std::pow(gap, 3) / 2.0;
+  p.block<3, 3>(6, 6) += i * a2 * gap * gap;               // v += a t
+}
 
 }  // namespace
 
@@ -298,16 +359,21 @@ bool LidarInertialOdometry::initialize_velocity(const Scan& first, const Scan& s
 
 void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& result) {
   const double t_end = scan_end_time(scan);
-  if (latest_imu_time() < t_end - config_.imu.max_gap_s) result.status |= kStatusImuGap;
 
   auto t = Clock::now();
   const NavState start = state_;
-  const auto intervals = imu_intervals(imu_, start.time, t_end);
+  auto intervals = imu_intervals(imu_, start.time, t_end);
+  const auto gaps = imu_gaps(imu_, start.time, t_end, config_.imu.max_gap_s);
+  if (!gaps.empty()) {
+    result.status |= kStatusImuGap;
+    bridge_imu_gaps(intervals, gaps, start, last_angular_rate_, gravity_);
+  }
   ImuPreintegration preintegration(start.gyro_bias, start.accel_bias, noise_);
   for (const auto& iv : intervals) preintegration.integrate(iv.gyro, iv.accel, iv.dt);
   NavState predicted = preintegration.predict(start, gravity_);
   predicted.time = t_end;
-  const StateCovariance predicted_covariance = propagate_covariance(preintegration, start);
+  StateCovariance predicted_covariance = propagate_covariance(preintegration, start);
+  if (!gaps.empty()) widen_for_imu_gaps(predicted_covariance, gaps);
   PoseTable relative = deskew_trajectory(scan, start, predicted, intervals);
   result.deskew_ms = elapsed_ms(t);
 
@@ -373,6 +439,9 @@ void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& resul
 }
 
 void LidarInertialOdometry::consider_keyframe(const Features& features, OdometryResult& result) {
+  // A scan too poor to register on the map (blinded or garbage returns) has nothing to add to it
+  // either; as a keyframe it would only push good keyframes out of the window.
+  if (result.status & kStatusFewFeatures) return;
   const auto& o = config_.odometry;
   if (keyframes_.empty()) {
     add_keyframe(features);

@@ -295,6 +295,7 @@ void Pipeline::odometry_thread() {
     const std::uint32_t scan_flags = status_flags(result->status);
     std::uint32_t f = scan_flags | live_flags(result->state.time);
     f &= ~static_cast<std::uint32_t>(pose::kLidarLost);  // this pose comes from a scan
+    if (item.clock_jump) f |= pose::kClockJump;
     ev.message.flags = with_ok(f);
     auto& d = ev.diagnostics;
     d.status = result->status;
@@ -316,8 +317,10 @@ void Pipeline::odometry_thread() {
     ev.process_end_ns = steady_ns();
     push_pose(ev);
     if (imu_poses) {
+      // IMU-rate poses are as (un)reliable as the scan they start from: while it is initialising
+      // (a rolling start's speed is not known yet) they are not usable either.
       const ScanAnchor anchor{result->state, odometry.gravity(), ev.message.covariance,
-                              scan_flags & (pose::kDegenerate | pose::kFewFeatures)};
+                              scan_flags & (pose::kInitializing | pose::kDegenerate | pose::kFewFeatures)};
       if (lockstep) propagator_.set_anchor(anchor);
       else anchors_.publish(anchor);
     }
@@ -351,7 +354,10 @@ void Pipeline::odometry_thread() {
           progress = true;
         }
         const bool imu_ended = !have_held && imu_ring_.drained();
-        if (odometry.latest_imu_time() >= end || imu_ended) {
+        // A held sample is past the scan's end: an IMU gap left nothing up to the end, and
+        // waiting for it would block both sources for good. Process now (flagged IMU gap).
+        const bool imu_passed = have_held && held.sample.time > end;
+        if (odometry.latest_imu_time() >= end || imu_passed || imu_ended) {
           process(pending.front());
           retire_front();
           progress = true;

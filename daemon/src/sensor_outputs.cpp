@@ -62,6 +62,10 @@ void LidarOutput::packet(std::span<const std::uint8_t> payload, std::int64_t arr
   stats_copy_ = s;
 }
 
+bool LidarOutput::sensor_agrees() const {
+  return std::llabs(offset_.offset_ns()) < static_cast<std::int64_t>(config_.time.jump_threshold_s * 1e9);
+}
+
 std::int64_t LidarOutput::clock_offset() const {
   const auto& difop = decoder_->last_difop();
   switch (config_.time.lidar_clock) {
@@ -70,10 +74,12 @@ std::int64_t LidarOutput::clock_offset() const {
     case LidarClock::kHost:
       return offset_.offset_ns();
     case LidarClock::kAuto: {
-      // The sensor's time when it says it is synced; before its first DIFOP, when it agrees with
-      // the host anyway (both synced, or a recording whose capture times are the header times).
-      const bool agrees = std::llabs(offset_.offset_ns()) < static_cast<std::int64_t>(config_.time.jump_threshold_s * 1e9);
-      const bool use_sensor = difop.has_value() ? difop->time_sync_status != 0 : agrees;
+      // The sensor's time when it says it is synced and agrees with the host; before its first
+      // DIFOP, when it agrees anyway (both synced, or a recording whose capture times are the
+      // header times). The IMU is stamped on the host clock, so a synced sensor that disagrees
+      // (its clock jumped, or the host lost sync) would put the scans at the wrong IMU time:
+      // its scans are timed on the host clock until it agrees again.
+      const bool use_sensor = sensor_agrees() && (!difop.has_value() || difop->time_sync_status != 0);
       return use_sensor ? 0 : offset_.offset_ns();
     }
   }
@@ -106,7 +112,11 @@ void LidarOutput::track_time(std::int64_t header_ns, std::int64_t arrival_ns) {
 
 void LidarOutput::on_sweep(Scan& scan) {
   const auto& difop = decoder_->last_difop();
-  synced_.store(difop.has_value() && difop->time_sync_status != 0, std::memory_order_relaxed);
+  const bool synced = difop.has_value() && difop->time_sync_status != 0;
+  synced_.store(synced, std::memory_order_relaxed);
+  const std::uint64_t jumps = offset_.jumps();
+  item_.clock_jump = (synced && !sensor_agrees()) || jumps != jumps_at_last_sweep_;
+  jumps_at_last_sweep_ = jumps;
   if (shift_ns_ != 0) {
     const double o = static_cast<double>(shift_ns_) * 1e-9;
     scan.start_time += o;

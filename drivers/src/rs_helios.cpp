@@ -44,6 +44,9 @@ HeliosStats RsHeliosDecoder::stats() const noexcept {
   s.sweeps = sweeps_.sweeps_emitted();
   s.partial_sweeps_dropped = sweeps_.partial_sweeps_dropped();
   s.time_gaps = sweeps_.time_gaps();
+  s.duplicate_packets = sweeps_.duplicate_packets();
+  s.late_packets = sweeps_.late_packets();
+  s.late_packets_dropped = sweeps_.late_packets_dropped();
   return s;
 }
 

@@ -22,8 +22,12 @@ SweepAssembler::SweepAssembler(SweepOptions options, Callback on_sweep)
 
 bool SweepAssembler::crosses_split(std::uint16_t prev, std::uint16_t az) const noexcept {
   // Unwrap prev below az when the azimuth wrapped, then ask whether split lies in (prev, az].
+  // A step back by less than half a turn is a late or repeated packet, not a wrap.
   std::int32_t p = prev;
-  if (az < prev) p -= kFullCircle;
+  if (az < prev) {
+    if (prev - az < kFullCircle / 2) return false;
+    p -= kFullCircle;
+  }
   const std::int32_t a = az;
   return (p < split_units_ && split_units_ <= a) ||
          (p < split_units_ - kFullCircle && split_units_ - kFullCircle <= a);
@@ -38,7 +42,49 @@ void SweepAssembler::start_sweep(std::int64_t block_time_ns, std::uint16_t azimu
   current_.beam_count = options_.beam_count;
 }
 
+bool SweepAssembler::repeats_recent(const PacketPoints& packet) noexcept {
+  const PacketKey key{packet.time_ns, packet.blocks[0].azimuth};
+  if (std::find(recent_packets_.begin(), recent_packets_.end(), key) != recent_packets_.end()) return true;
+  recent_packets_[recent_next_] = key;
+  recent_next_ = (recent_next_ + 1) % recent_packets_.size();
+  return false;
+}
+
+void SweepAssembler::add_late(const PacketPoints& packet) {
+  if (packet.time_ns < reference_ns_) {
+    ++late_dropped_;
+    return;
+  }
+  ++late_;
+  ++info_.packets;
+  info_.blocks += static_cast<std::uint32_t>(packet.block_count);
+  // Into the sweep where its time belongs: the feature extraction walks each ring in time order.
+  const double packet_to_ref_s = static_cast<double>(packet.time_ns - reference_ns_) * 1e-9;
+  std::array<LidarPoint, PacketPoints::kMaxPoints> rebased;
+  for (std::size_t i = 0; i < packet.point_count; ++i) {
+    rebased[i] = packet.points[i];
+    rebased[i].time = static_cast<float>(packet_to_ref_s + static_cast<double>(packet.points[i].time));
+  }
+  auto& points = current_.points;
+  const float first = packet.point_count > 0 ? rebased[0].time : 0.0F;
+  const auto at = std::upper_bound(points.begin(), points.end(), first,
+                                   [](float t, const LidarPoint& p) { return t < p.time; });
+  points.insert(at, rebased.begin(), rebased.begin() + static_cast<std::ptrdiff_t>(packet.point_count));
+}
+
 void SweepAssembler::add(const PacketPoints& packet) {
+  if (packet.block_count == 0) return;
+  if (repeats_recent(packet)) {
+    ++duplicates_;
+    return;
+  }
+  const std::int64_t first_block_ns =
+      packet.time_ns + static_cast<std::int64_t>(std::llround(static_cast<double>(packet.blocks[0].time_offset_s) * 1e9));
+  const double late_s = static_cast<double>(last_block_ns_ - first_block_ns) * 1e-9;
+  if (open_ && late_s > 0.0 && late_s <= options_.max_block_gap_s) {
+    add_late(packet);
+    return;
+  }
   bool counted_packet = false;
   for (std::size_t b = 0; b < packet.block_count; ++b) {
     const FiringBlock& block = packet.blocks[b];

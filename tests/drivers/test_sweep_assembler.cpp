@@ -130,6 +130,46 @@ TEST(SweepAssembly, LostPacketsAreCountedAndALongGapCutsTheSweep) {
   EXPECT_TRUE(c.infos[1].ended_by_gap);
 }
 
+TEST(SweepAssembly, LateAndRepeatedPacketsJoinTheirSweepInTimeOrder) {
+  // Delivery order of a 3-sweep stream: 50 after 51 and 52, 70 twice, and 149 (the last packet of
+  // the first sweep) after 150 (the first of the second), when its sweep is already out.
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < 451; ++i) {
+    if (i == 50 || i == 149) continue;
+    order.push_back(i);
+    if (i == 52) order.push_back(50);
+    if (i == 70) order.push_back(70);
+    if (i == 150) order.push_back(149);
+  }
+  Collected c;
+  HeliosStats stats;
+  {
+    RsHeliosDecoder dec(options(0.0), [&](Scan& s, const SweepInfo& info) {
+      c.scans.push_back(s);
+      c.infos.push_back(info);
+    });
+    const Stream stream(0);
+    for (const std::size_t i : order) dec.feed(stream.packet(i));
+    stats = dec.stats();
+  }
+  // No sweep cut short: the split stays where the azimuth crosses 0°.
+  ASSERT_EQ(c.scans.size(), 3U);
+  EXPECT_EQ(stats.time_gaps, 0U);
+  EXPECT_EQ(stats.duplicate_packets, 1U);
+  EXPECT_EQ(stats.late_packets, 1U);
+  EXPECT_EQ(stats.late_packets_dropped, 1U);
+  EXPECT_EQ(c.scans[0].points.size(), 149U * 12U * 32U);  // all but the packet that came too late
+  EXPECT_EQ(c.scans[1].points.size(), 150U * 12U * 32U);
+  EXPECT_EQ(c.scans[2].points.size(), 150U * 12U * 32U);
+  // Each ring in time order, as the feature extraction walks it: one firing every 55.56 µs.
+  std::vector<std::vector<float>> ring_times(32);
+  for (const LidarPoint& p : c.scans[0].points) ring_times[p.ring].push_back(p.time);
+  for (const auto& times : ring_times) {
+    ASSERT_EQ(times.size(), 149U * 12U);
+    for (std::size_t k = 1; k < times.size(); ++k) ASSERT_NEAR(times[k] - times[k - 1], kT, 1e-6) << k;
+  }
+}
+
 TEST(SweepAssembly, BuffersAreRecycledWhenTheConsumerSwaps) {
   std::vector<const LidarPoint*> buffers;
   Scan recycled;

@@ -171,7 +171,7 @@ struct DriversConfig {
 enum class LidarClock { kAuto, kSensor, kHost };
 
 struct TimeConfig {
-  LidarClock lidar_clock = LidarClock::kAuto;  // auto: sensor time when DIFOP says PTP/GPS synced, else host
+  LidarClock lidar_clock = LidarClock::kAuto;  // auto: sensor time when DIFOP says PTP/GPS synced and it agrees with the host, else host
   double offset_window_s = 2.0;     // host-sensor offset = minimum of (arrival - header) over this window
   double jump_threshold_s = 0.1;    // an offset or host clock step beyond this is a clock jump
   double jump_flag_s = 10.0;        // poses carry the clock_jump flag this long after one

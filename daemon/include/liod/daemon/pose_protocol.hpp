@@ -53,7 +53,7 @@ enum Flag : std::uint32_t {
   kLidarLost = 1U << 4,     ///< no LiDAR sweep for longer than drivers.lidar.lost_after_s
   kKeyframe = 1U << 5,      ///< this scan became a keyframe
   kFewFeatures = 1U << 6,   ///< too few features for a reliable update
-  kClockJump = 1U << 7,     ///< a clock stepped within time.jump_flag_s (taken out: poses stay continuous)
+  kClockJump = 1U << 7,     ///< a clock stepped within time.jump_flag_s, or the LiDAR's clock jumped in this scan or disagrees with the host
 };
 
 struct PoseMessage {

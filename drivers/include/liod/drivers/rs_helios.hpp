@@ -72,6 +72,9 @@ struct HeliosStats {
   std::uint64_t counter_resets = 0;   ///< counter went backwards or jumped implausibly far
   std::uint64_t azimuth_jumps = 0;    ///< packet-to-packet azimuth step > 1° (loss or blind zone)
   std::uint64_t time_gaps = 0;        ///< sweeps cut short by a time gap or a clock step
+  std::uint64_t duplicate_packets = 0;  ///< repeats of a recent packet (same header time), ignored
+  std::uint64_t late_packets = 0;       ///< arrived after later ones: added to their sweep in time order
+  std::uint64_t late_packets_dropped = 0;  ///< arrived after their sweep was out
   std::uint64_t sweeps = 0;
   std::uint64_t partial_sweeps_dropped = 0;
 

@@ -7,9 +7,11 @@
 // recycles (whatever is left in the reference is cleared and becomes the next working buffer).
 // Moving out of it also works but costs one allocation per sweep.
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 
 #include "liod/drivers/packet_points.hpp"
 #include "liod/types.hpp"
@@ -51,6 +53,11 @@ class SweepAssembler {
 
   SweepAssembler(SweepOptions options, Callback on_sweep);
 
+  /// A packet with the header time and first azimuth of one of the last few is a repeat and
+  /// adds nothing. One
+  /// that arrives after later ones (reordered on the way; older than the newest block by up to
+  /// max_block_gap_s) joins the open sweep in time order without moving the split, or is
+  /// dropped when it is older than the open sweep (its sweep is already out).
   void add(const PacketPoints& packet);
   /// End of stream: emits the open sweep if it has blocks and options.emit_partial_on_flush is
   /// set, otherwise drops it (counted). Then starts afresh.
@@ -59,8 +66,13 @@ class SweepAssembler {
   [[nodiscard]] std::uint64_t sweeps_emitted() const noexcept { return next_sequence_; }
   [[nodiscard]] std::uint64_t partial_sweeps_dropped() const noexcept { return partial_dropped_; }
   [[nodiscard]] std::uint64_t time_gaps() const noexcept { return time_gaps_; }
+  [[nodiscard]] std::uint64_t duplicate_packets() const noexcept { return duplicates_; }
+  [[nodiscard]] std::uint64_t late_packets() const noexcept { return late_; }
+  [[nodiscard]] std::uint64_t late_packets_dropped() const noexcept { return late_dropped_; }
 
  private:
+  [[nodiscard]] bool repeats_recent(const PacketPoints& packet) noexcept;
+  void add_late(const PacketPoints& packet);
   void start_sweep(std::int64_t block_time_ns, std::uint16_t azimuth);
   void finish_sweep();
   [[nodiscard]] bool crosses_split(std::uint16_t prev, std::uint16_t az) const noexcept;
@@ -77,6 +89,16 @@ class SweepAssembler {
   std::uint64_t next_sequence_ = 0;
   std::uint64_t partial_dropped_ = 0;
   std::uint64_t time_gaps_ = 0;
+  struct PacketKey {
+    std::int64_t time_ns = std::numeric_limits<std::int64_t>::min();
+    std::uint16_t azimuth = 0;
+    bool operator==(const PacketKey&) const = default;
+  };
+  std::array<PacketKey, 16> recent_packets_{};  // the last packets, to recognise repeats
+  std::size_t recent_next_ = 0;
+  std::uint64_t duplicates_ = 0;
+  std::uint64_t late_ = 0;
+  std::uint64_t late_dropped_ = 0;
 };
 
 }  // namespace liod::drivers

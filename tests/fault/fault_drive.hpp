@@ -1,0 +1,30 @@
+#pragma once
+// The drive every fault test starts from: `liod-sim --route urban --seed 1 --duration 25
+// --max-speed 12` (rolling start, ~220 m with a 90 deg turn at 13-15 s). Generated once into the
+// build tree (test-data/fault-drive/) and shared by the test processes (ctest runs each test in
+// its own); made again when liod-sim has been rebuilt since.
+
+#include <filesystem>
+
+#include "liod/eval/trajectory.hpp"
+#include "liod/fault/recording.hpp"
+
+namespace liod::test {
+
+struct FaultDrive {
+  std::filesystem::path dir;  ///< lidar.pcap, imu.csv, groundtruth.tum, extrinsics.yaml
+  fault::Recording recording;
+  eval::Trajectory truth;
+  /// Absolute time (s, IMU clock) of a fault time (s after the recording's origin).
+  [[nodiscard]] double at(double seconds) const { return static_cast<double>(recording.origin_ns) * 1e-9 + seconds; }
+  [[nodiscard]] double end() const { return truth.stamps.back(); }
+};
+
+/// The drive, or null when liod-sim is not built in this tree.
+const FaultDrive* fault_drive();
+
+}  // namespace liod::test
+
+#define LIOD_REQUIRE_FAULT_DRIVE(var)                                                            \
+  const auto* var = liod::test::fault_drive();                                                   \
+  if (var == nullptr) GTEST_SKIP() << "liod-sim not built in " << LIOD_BINARY_DIR << "/bin (build target liod-sim)"

@@ -1,0 +1,40 @@
+#pragma once
+// What the fault tests measure on the published poses, against the drive's ground truth.
+
+#include <cstdint>
+#include <vector>
+
+#include "liod/daemon/pose_protocol.hpp"
+#include "liod/eval/trajectory.hpp"
+
+namespace liod::test {
+
+struct Accuracy {
+  double rmse_m = 0.0;
+  double max_m = 0.0;
+  std::size_t poses = 0;
+};
+/// Absolute trajectory error of the scan poses in [from, to), after one SE(3) alignment of all
+/// scan poses on the ground truth (liod-eval's ATE, restricted to a window).
+Accuracy scan_accuracy(const std::vector<pose::PoseMessage>& poses, const eval::Trajectory& truth, double from,
+                       double to);
+
+struct Jump {
+  double position_m = 0.0;   ///< | |dp estimated| - |dp true| |
+  double rotation_deg = 0.0; ///< | angle turned estimated - angle turned true |
+  double at = 0.0;           ///< time of the later pose of the worst position step
+};
+/// The worst step between consecutive published poses (both rates, in publish order) beyond
+/// what the vehicle really moved between the same instants: a wild pose shows here. Pairs with an
+/// initialising pose are left out: its position means nothing yet (docs/pose-protocol.md).
+Jump largest_jump(const std::vector<pose::PoseMessage>& poses, const eval::Trajectory& truth);
+
+struct FlagCount {
+  std::size_t poses = 0;
+  std::size_t flagged = 0;
+};
+/// Poses of `type` with time in [from, to), and how many of them carry `flag`.
+FlagCount count_flag(const std::vector<pose::PoseMessage>& poses, pose::MessageType type, std::uint32_t flag,
+                     double from, double to);
+
+}  // namespace liod::test

@@ -1,0 +1,289 @@
+// Fault injection (issue 7): each test rewrites the simulated drive with one fault (liod_fault),
+// replays it through the real pipeline and checks what a client of the pose socket would see:
+// liod runs to the end, flags the affected poses, never publishes a pose that jumps further than
+// the vehicle moved by more than kMaxJump, and is back to its accuracy once the data is. Every
+// test prints one line with the figures it measured ("[ fault ] ...").
+//
+// The drive: urban, seed 1, 25 s, up to 12 m/s, rolling start (see fault_drive.hpp). Faults start
+// at 10 s, on a straight that leads into a braking, 90 deg left turn at 13-15 s.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <sstream>
+
+#include "fault_drive.hpp"
+#include "fault_run.hpp"
+#include "pose_checks.hpp"
+
+using namespace liod;
+using namespace liod::test;
+
+namespace {
+
+// A published pose may differ from the true motion since the previous one by at most this:
+// far above the sensors' noise and a few scans of IMU dead reckoning, far below a wild pose.
+constexpr double kMaxJumpM = 0.3;
+constexpr double kMaxJumpDeg = 2.0;
+// Accuracy a drive must keep overall and once the data is back (the clean drive: ~0.045 m).
+constexpr double kMaxAteM = 0.10;
+// Seconds after a fault's end from which the pose counts as recovered.
+constexpr double kRecoveryS = 1.0;
+
+/// "0.5", "5", "-1": seconds as a reader writes them.
+std::string seconds(double s) {
+  std::ostringstream out;
+  out << s;
+  return out.str();
+}
+
+constexpr auto kScan = pose::MessageType::ScanPose;
+constexpr auto kImu = pose::MessageType::ImuPose;
+
+struct Outcome {
+  Accuracy overall, after;  ///< ATE of the whole drive, and from kRecoveryS after the fault on
+  Jump jump;
+  std::size_t scan_poses = 0;
+};
+
+/// The checks every fault shares; prints the figures. `fault_end`: seconds after the recording's
+/// origin when the data is whole again; `max_ate_m`: the accuracy the whole drive must keep.
+Outcome common_checks(const FaultDrive& drive, const FaultRun& run, const std::string& name, double fault_end,
+                      double max_ate_m = kMaxAteM) {
+  Outcome o;
+  EXPECT_TRUE(run.finished) << name << ": the pipeline did not finish";
+  EXPECT_EQ(run.error, "") << name;
+  const auto scans = run.of_type(kScan);
+  o.scan_poses = scans.size();
+  EXPECT_FALSE(scans.empty()) << name;
+  if (scans.empty()) return o;
+  // Runs to the end of the recording.
+  EXPECT_GT(scans.back().time, drive.end() - 0.5) << name << ": the last scan pose is not at the end of the drive";
+  o.jump = largest_jump(run.poses, drive.truth);
+  EXPECT_LE(o.jump.position_m, kMaxJumpM) << name << ": a pose jumped at t = " << std::fixed << o.jump.at;
+  EXPECT_LE(o.jump.rotation_deg, kMaxJumpDeg) << name;
+  o.overall = scan_accuracy(run.poses, drive.truth, 0.0, 1e300);
+  o.after = scan_accuracy(run.poses, drive.truth, drive.at(fault_end + kRecoveryS), 1e300);
+  EXPECT_LE(o.overall.rmse_m, max_ate_m) << name;
+  std::ostringstream line;
+  line << std::fixed << std::setprecision(3) << "[ fault ] " << name << ": " << o.scan_poses << " scan poses, largest jump "
+       << o.jump.position_m << " m / " << std::setprecision(2) << o.jump.rotation_deg << " deg (bound " << kMaxJumpM
+       << " m / " << kMaxJumpDeg << " deg), ATE " << std::setprecision(3) << o.overall.rmse_m << " m overall (max "
+       << o.overall.max_m << "), " << o.after.rmse_m << " m from " << seconds(kRecoveryS) << " s after the fault ("
+       << (std::isfinite(max_ate_m) ? "bound " + seconds(max_ate_m) + " m" : std::string("no bound")) << ")";
+  for (const auto& a : run.applied) line << "\n          " << a;
+  std::cout << line.str() << std::endl;
+  ::testing::Test::RecordProperty("ate_m", std::to_string(o.overall.rmse_m));
+  ::testing::Test::RecordProperty("ate_after_recovery_m", std::to_string(o.after.rmse_m));
+  ::testing::Test::RecordProperty("largest_jump_m", std::to_string(o.jump.position_m));
+  return o;
+}
+
+/// Every scan pose from `from` on (seconds after the origin) is usable: ok, none of the bad flags.
+void expect_ok_from(const FaultDrive& drive, const FaultRun& run, double from, const std::string& name) {
+  const auto ok = count_flag(run.poses, kScan, pose::kOk, drive.at(from), 1e300);
+  EXPECT_GT(ok.poses, 0U) << name;
+  EXPECT_EQ(ok.flagged, ok.poses) << name << ": scan poses from " << from << " s on not all flagged ok";
+}
+
+void print_flags(const std::string& what, const FlagCount& c) {
+  std::cout << "          " << what << ": " << c.flagged << " of " << c.poses << std::endl;
+}
+
+}  // namespace
+
+TEST(FaultInjection, CleanDriveReference) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  const auto run = run_with_faults(*drive, {});
+  common_checks(*drive, run, "no fault (reference)", 0.0);
+  expect_ok_from(*drive, run, 1.0, "clean");
+}
+
+TEST(FaultInjection, Drop10PercentOfPackets) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  const auto run = run_with_faults(*drive, {"drop:percent=10"});
+  const auto o = common_checks(*drive, run, "10 % of MSOP packets lost", 0.0);
+  EXPECT_GT(run.lidar.lost_packets, 3000U);  // the decoder sees the loss in the packet counter
+  EXPECT_GE(o.scan_poses, 240U);             // every sweep still makes a scan
+  expect_ok_from(*drive, run, 1.0, "drop 10 %");
+}
+
+TEST(FaultInjection, Drop30PercentOfPackets) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  const auto run = run_with_faults(*drive, {"drop:percent=30"});
+  const auto o = common_checks(*drive, run, "30 % of MSOP packets lost", 0.0);
+  EXPECT_GE(o.scan_poses, 240U);
+  expect_ok_from(*drive, run, 1.0, "drop 30 %");
+}
+
+TEST(FaultInjection, Reorder10PercentOfPackets) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  const auto run = run_with_faults(*drive, {"reorder:percent=10,max-shift=5"});
+  const auto o = common_checks(*drive, run, "10 % of MSOP packets late by up to 5 packets", 0.0);
+  EXPECT_GT(run.lidar.late_packets, 3000U);  // merged into their sweep, not splitting it
+  EXPECT_GE(o.scan_poses, 240U);
+  EXPECT_LE(o.scan_poses, 250U);
+  expect_ok_from(*drive, run, 1.0, "reorder");
+}
+
+TEST(FaultInjection, Duplicate10PercentOfPackets) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  const auto run = run_with_faults(*drive, {"duplicate:percent=10"});
+  const auto o = common_checks(*drive, run, "10 % of MSOP packets delivered twice", 0.0);
+  EXPECT_GT(run.lidar.duplicate_packets, 3000U);
+  EXPECT_GE(o.scan_poses, 240U);
+  EXPECT_LE(o.scan_poses, 250U);
+  expect_ok_from(*drive, run, 1.0, "duplicate");
+}
+
+namespace {
+
+void imu_cut(double duration) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  const double from = 10.0;
+  const double to = from + duration;
+  const auto run = run_with_faults(*drive, {"imu-cut:from=" + seconds(from) + ",to=" + seconds(to)});
+  const std::string name = "IMU cut for " + seconds(duration) + " s";
+  const auto o = common_checks(*drive, run, name, to);
+  EXPECT_LE(o.after.rmse_m, kMaxAteM) << name;
+  // The scans over the gap are flagged, none before or after it; no IMU-rate pose without IMU.
+  const auto during = count_flag(run.poses, kScan, pose::kImuLost, drive->at(from + 0.1), drive->at(to));
+  const auto before = count_flag(run.poses, kScan, pose::kImuLost, 0.0, drive->at(from));
+  const auto after = count_flag(run.poses, kScan, pose::kImuLost, drive->at(to + 0.2), 1e300);
+  print_flags("scan poses flagged imu_lost in the gap", during);
+  EXPECT_GE(during.poses, static_cast<std::size_t>(duration * 10.0) - 2);
+  EXPECT_EQ(during.flagged, during.poses);
+  EXPECT_EQ(before.flagged, 0U);
+  EXPECT_EQ(after.flagged, 0U);
+  EXPECT_EQ(count_flag(run.poses, kImu, 0, drive->at(from + 0.01), drive->at(to)).poses, 0U);
+  expect_ok_from(*drive, run, to + 0.2, name);
+}
+
+}  // namespace
+
+TEST(FaultInjection, ImuCutHalfSecond) { imu_cut(0.5); }
+TEST(FaultInjection, ImuCutFiveSeconds) { imu_cut(5.0); }
+
+TEST(FaultInjection, LidarStopTwoSeconds) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  const auto run = run_with_faults(*drive, {"lidar-stop:from=10,to=12"});
+  const auto o = common_checks(*drive, run, "LiDAR silent for 2 s", 12.0);
+  EXPECT_LE(o.after.rmse_m, kMaxAteM);
+  EXPECT_EQ(count_flag(run.poses, kScan, 0, drive->at(10.1), drive->at(12.0)).poses, 0U);
+  // IMU-rate poses go on, flagged once no sweep came for drivers.lidar.lost_after_s (0.5 s).
+  const auto lost = count_flag(run.poses, kImu, pose::kLidarLost, drive->at(10.7), drive->at(12.0));
+  print_flags("IMU-rate poses flagged lidar_lost during the stop", lost);
+  EXPECT_GT(lost.poses, 200U);
+  EXPECT_EQ(lost.flagged, lost.poses);
+  EXPECT_EQ(count_flag(run.poses, kImu, pose::kLidarLost, 0.0, drive->at(10.4)).flagged, 0U);
+  EXPECT_EQ(count_flag(run.poses, kImu, pose::kLidarLost, drive->at(12.3), 1e300).flagged, 0U);
+  expect_ok_from(*drive, run, 12.2, "LiDAR stop");
+}
+
+namespace {
+
+void lidar_clock_jump(double by) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  const auto run = run_with_faults(*drive, {"clock-jump:sensor=lidar,at=10,by=" + seconds(by)});
+  const std::string name = "LiDAR header clock steps " + seconds(by) + " s";
+  const auto o = common_checks(*drive, run, name, 10.0);
+  EXPECT_LE(o.after.rmse_m, kMaxAteM) << name;
+  EXPECT_GE(o.scan_poses, 240U) << name;  // no scan lost to the wrong time
+  // From the step on, the scans are timed on the host clock and say so.
+  const auto flagged = count_flag(run.poses, kScan, pose::kClockJump, drive->at(10.1), 1e300);
+  print_flags("scan poses flagged clock_jump after the step", flagged);
+  EXPECT_EQ(flagged.flagged, flagged.poses);
+  EXPECT_EQ(count_flag(run.poses, kScan, pose::kClockJump, 0.0, drive->at(10.0)).flagged, 0U);
+  expect_ok_from(*drive, run, 10.3, name);
+}
+
+}  // namespace
+
+TEST(FaultInjection, LidarClockJumpsForward1s) { lidar_clock_jump(1.0); }
+TEST(FaultInjection, LidarClockJumpsBack1s) { lidar_clock_jump(-1.0); }
+
+namespace {
+
+// The IMU stamps step for good: the IMU now runs `by` seconds off the LiDAR. The IMU stamps are
+// liod's reference clock (its drivers stamp on the host clock and re-track a step of the IMU's own
+// clock, drivers::OffsetTracker), so nothing tells it which sensor is wrong: the data never
+// becomes consistent again and the accuracy is not kept (stated, not bounded; see
+// docs/robustness.md). What liod still guarantees: it runs on, flags the gap a forward step
+// leaves, and no pose jumps. Back, the samples that do not increase are dropped (as the drivers
+// drop them) and the stamps run on without a gap, so nothing is flagged.
+void imu_clock_jump(double by) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  const auto run = run_with_faults(*drive, {"clock-jump:sensor=imu,at=10,by=" + seconds(by)});
+  const std::string name = "IMU clock steps " + seconds(by) + " s (accuracy not kept)";
+  common_checks(*drive, run, name, 10.0 + std::abs(by), std::numeric_limits<double>::infinity());
+  if (by > 0) {
+    const auto gap = count_flag(run.poses, kScan, pose::kImuLost, drive->at(10.1), drive->at(10.0 + by));
+    print_flags("scan poses flagged imu_lost in the stamp gap", gap);
+    EXPECT_GE(gap.poses, 8U);
+    EXPECT_EQ(gap.flagged, gap.poses);
+  }
+}
+
+}  // namespace
+
+TEST(FaultInjection, ImuClockJumpsForward1sNoWildPose) { imu_clock_jump(1.0); }
+TEST(FaultInjection, ImuClockJumpsBack1sNoWildPose) { imu_clock_jump(-1.0); }
+
+namespace {
+
+void corrupt_fifth_of_packets(const std::string& mode) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  const auto run = run_with_faults(*drive, {"corrupt:mode=" + mode + ",percent=20"});
+  const auto o = common_checks(*drive, run, "20 % of MSOP packets with " + mode + " in every slot", 0.0);
+  EXPECT_GE(o.scan_poses, 240U);
+  expect_ok_from(*drive, run, 1.0, mode);
+}
+
+}  // namespace
+
+TEST(FaultInjection, ZeroRangeIn20PercentOfPackets) { corrupt_fifth_of_packets("zero"); }
+TEST(FaultInjection, MaxRangeIn20PercentOfPackets) { corrupt_fifth_of_packets("max"); }
+TEST(FaultInjection, GarbageIn20PercentOfPackets) { corrupt_fifth_of_packets("garbage"); }
+
+TEST(FaultInjection, OnlyGarbageForThreeSeconds) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  const auto run = run_with_faults(*drive, {"corrupt:mode=garbage,from=10,to=13"});
+  const auto o = common_checks(*drive, run, "every MSOP packet garbage for 3 s", 13.0);
+  EXPECT_LE(o.after.rmse_m, kMaxAteM);
+  // Nothing to register on: flagged, never ok, and the IMU carries the pose.
+  const auto few = count_flag(run.poses, kScan, pose::kFewFeatures, drive->at(10.1), drive->at(13.0));
+  const auto ok = count_flag(run.poses, kScan, pose::kOk, drive->at(10.1), drive->at(13.0));
+  print_flags("scan poses flagged few_features in the window", few);
+  EXPECT_GE(few.poses, 25U);
+  EXPECT_EQ(few.flagged, few.poses);
+  EXPECT_EQ(ok.flagged, 0U);
+  expect_ok_from(*drive, run, 13.2, "garbage");
+}
+
+TEST(FaultInjection, OnlyTheNearGroundForTwoSeconds) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  // The LiDAR is 1.83 m above the road: keep the returns below 1.7 m under it and within 20 m.
+  const auto run = run_with_faults(*drive, {"ground-only:from=10,to=12,max-z=-1.7,max-range=20"});
+  const auto o = common_checks(*drive, run, "only the ground within 20 m for 2 s", 12.0);
+  EXPECT_LE(o.after.rmse_m, kMaxAteM);
+  const auto degenerate = count_flag(run.poses, kScan, pose::kDegenerate, drive->at(10.1), drive->at(12.0));
+  print_flags("scan poses flagged degenerate in the window", degenerate);
+  EXPECT_GE(degenerate.poses, 15U);
+  EXPECT_EQ(degenerate.flagged, degenerate.poses);
+  expect_ok_from(*drive, run, 12.2, "ground only");
+}
+
+TEST(FaultInjection, StartWhileMoving) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  // 8 s in, at 10 m/s: the first scan sees the vehicle already moving.
+  const auto run = run_with_faults(*drive, {"cut-start:at=8"});
+  const auto o = common_checks(*drive, run, "recording starts at 8 s, moving", 8.0);
+  EXPECT_LE(o.after.rmse_m, kMaxAteM);
+  const auto scans = run.of_type(kScan);
+  ASSERT_FALSE(scans.empty());
+  EXPECT_NE(scans.front().flags & pose::kInitializing, 0U);
+  EXPECT_LT(scans.front().time, drive->at(8.6));  // within the first sweeps
+  expect_ok_from(*drive, run, 9.0, "start while moving");
+}

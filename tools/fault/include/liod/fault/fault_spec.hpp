@@ -1,0 +1,89 @@
+#pragma once
+// The faults liod-fault can inject, each with its parameters, and their text form
+// "kind:key=value,key=value" (e.g. "drop:percent=10", "imu-cut:from=8,to=8.5"). Times are seconds
+// after the recording's origin (Recording::origin_ns); LiDAR datagrams are placed in time by their
+// capture (arrival) time, IMU samples by their stamp.
+
+#include <limits>
+#include <string>
+#include <string_view>
+#include <variant>
+
+namespace liod::fault {
+
+/// [from_s, to_s): the whole recording by default.
+struct Window {
+  double from_s = -std::numeric_limits<double>::infinity();
+  double to_s = std::numeric_limits<double>::infinity();
+  [[nodiscard]] bool contains(double t) const { return t >= from_s && t < to_s; }
+};
+
+/// `percent` % of the MSOP packets in the window are lost.
+struct DropPackets {
+  double percent = 0.0;
+  Window window;
+};
+/// `percent` % of the MSOP packets in the window arrive late, after up to `max_shift` later ones
+/// (arrival times stay in order; the contents change places).
+struct ReorderPackets {
+  double percent = 0.0;
+  int max_shift = 3;
+  Window window;
+};
+/// `percent` % of the MSOP packets in the window arrive twice.
+struct DuplicatePackets {
+  double percent = 0.0;
+  Window window;
+};
+/// No LiDAR datagram (MSOP or DIFOP) arrives in the window.
+struct StopLidar {
+  Window window;
+};
+/// No IMU sample in the window.
+struct CutImu {
+  Window window;
+};
+enum class Sensor { Lidar, Imu };
+/// From `at_s` on, the sensor's clock reads `by_s` seconds more (negative: less). LiDAR: the
+/// MSOP header time (arrival times are the host's and stay). IMU: the sample stamps; samples
+/// that would not follow the previous one are dropped, as liod's IMU drivers drop them.
+struct ClockJump {
+  Sensor sensor = Sensor::Lidar;
+  double at_s = 0.0;
+  double by_s = 0.0;
+};
+/// What corrupted packets carry in every slot (NaN cannot be encoded in MSOP).
+enum class Corruption {
+  ZeroRange,  ///< range 0: "no return"
+  MaxRange,   ///< range 0xFFFF: the largest the field holds (163.8 m at 2.5 mm)
+  Garbage,    ///< random range and intensity bytes
+};
+/// `percent` % of the MSOP packets in the window have every slot corrupted.
+struct CorruptPoints {
+  Corruption mode = Corruption::ZeroRange;
+  double percent = 100.0;
+  Window window;
+};
+/// In the window the LiDAR sees only the ground near the vehicle: every return higher than
+/// `max_z_m` in the sensor frame (range x sine of the laser's elevation) or farther than
+/// `max_range_m` is blanked (range 0).
+struct GroundOnly {
+  Window window;
+  double max_z_m = -1.5;
+  double max_range_m = std::numeric_limits<double>::infinity();
+};
+/// The recording starts at `at_s`: earlier datagrams and samples are removed (a start while
+/// the vehicle moves).
+struct CutStart {
+  double at_s = 0.0;
+};
+
+using Fault = std::variant<DropPackets, ReorderPackets, DuplicatePackets, StopLidar, CutImu, ClockJump, CorruptPoints,
+                           GroundOnly, CutStart>;
+
+/// Parses the text form; throws std::invalid_argument naming the offending part.
+[[nodiscard]] Fault parse_fault(std::string_view text);
+/// One line per kind: its text form with every key.
+[[nodiscard]] std::string fault_syntax();
+
+}  // namespace liod::fault
