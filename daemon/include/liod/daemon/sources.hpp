@@ -21,8 +21,17 @@ struct PaceClock {
   double pace = 0.0;               ///< 0 = as fast as possible
   std::int64_t data_start_ns = 0;
   std::int64_t host_start_steady_ns = 0;
+  /// A datum due further than this from now (a recorded pause, a capture time years off) moves
+  /// the clock so that it is due now: the replay neither sleeps for years nor races the rest.
+  std::int64_t max_offset_ns = 10'000'000'000;
   /// Sleeps (in bounded steps, calling `heartbeat`) until `data_ns` is due. False if stopped.
   bool wait_until(std::int64_t data_ns, const std::atomic<bool>& stop, const std::function<void()>& heartbeat) const;
+  /// How often the clock was moved for a datum beyond max_offset_ns.
+  std::uint64_t reanchors() const noexcept { return reanchors_.load(std::memory_order_relaxed); }
+
+ private:
+  mutable std::atomic<std::int64_t> shift_ns_{0};
+  mutable std::atomic<std::uint64_t> reanchors_{0};
 };
 
 class PcapLidarSource : public LidarSource {
