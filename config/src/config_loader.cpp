@@ -287,6 +287,7 @@ Schema declare_schema(Config& c) {
   s.real("backend.keyframe_voxel_m", &b.keyframe_voxel_m, 0.01, 10.0);
   s.real("backend.map_voxel_m", &b.map_voxel_m, 0.01, 10.0);
   s.boolean("backend.persist", &b.persist);
+  s.integer("backend.memory_keyframes", &b.memory_keyframes, 0, 1000000);
   s.text("output.pose_socket", &c.output.pose_socket);
   s.text("output.state_dir", &c.output.state_dir);
 

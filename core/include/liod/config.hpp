@@ -114,6 +114,7 @@ struct BackendConfig {
   double keyframe_voxel_m = 0.3;        // keyframe points kept by the backend (body frame)
   double map_voxel_m = 0.3;             // downsampling of the global map PCD
   bool persist = false;                 // write keyframes + graph to output.state_dir (atomically)
+  int memory_keyframes = 200;           // keyframe clouds kept in memory (LRU); others on disk; 0 = all in memory
 };
 
 struct OutputConfig {
