@@ -119,14 +119,23 @@ bool Backend::close_loop(const LoopCheck& check) {
   };
   const std::size_t outliers_before = scale > 0.0 ? outliers() : 0;
 
-  // Initial guess with the new loop closed: its error (registered vs graph pose of the current
-  // keyframe) spread along the keyframes since the candidate. Starting the solve from there
-  // keeps a redescending (Cauchy) kernel from treating a large but true drift as an outlier.
+  // The solve's window: the keyframes since the candidate, at most solve_window_keyframes of
+  // them (0: the whole graph). Older nodes are held; the loops and odometry factors that reach
+  // into the window from them anchor it. This bounds the cost of a solve on a long drive (a full
+  // solve grew to 4 s at 13 000 keyframes); the price is that a loop with an old candidate bends
+  // only the window, not the whole stretch since the candidate.
   const std::size_t j = check.candidate;
   const std::size_t c = check.current;
+  const std::size_t window = static_cast<std::size_t>(b.solve_window_keyframes);
+  const std::size_t first_free = window == 0 ? 0 : std::max(j, c + 1 > window ? c + 1 - window : 0);
+
+  // Initial guess with the new loop closed: its error (registered vs graph pose of the current
+  // keyframe) spread along the free keyframes since the candidate. Starting the solve from there
+  // keeps a redescending (Cauchy) kernel from treating a large but true drift as an outlier.
+  const std::size_t anchor = first_free > j ? first_free - 1 : j;
   const Eigen::Isometry3d delta = check.registered * graph_.pose(c).inverse();
-  for (std::size_t k = j + 1; k <= c; ++k) {
-    const double s = static_cast<double>(k - j) / static_cast<double>(c - j);
+  for (std::size_t k = anchor + 1; k <= c; ++k) {
+    const double s = static_cast<double>(k - anchor) / static_cast<double>(c - anchor);
     graph_.set_pose(k, interpolate(Eigen::Isometry3d::Identity(), delta, s) * graph_.pose(k));
   }
   PoseGraphFactor f;
@@ -137,7 +146,7 @@ bool Backend::close_loop(const LoopCheck& check) {
   f.loop = true;
   graph_.add_factor(f);
   const SolveReport report =
-      graph_.optimize(scale > 0.0 ? RobustLoss::kCauchy : RobustLoss::kNone, scale, b.max_solver_iterations);
+      graph_.optimize(scale > 0.0 ? RobustLoss::kCauchy : RobustLoss::kNone, scale, b.max_solver_iterations, first_free);
   stats_.solve_ms.push_back(report.solve_ms);
 
   // Consistency: a loop the solution leaves beyond the kernel scale, or one that turns earlier
