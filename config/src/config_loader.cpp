@@ -284,9 +284,11 @@ Schema declare_schema(Config& c) {
   s.real("backend.loop_rotation_sigma_deg", &b.loop_rotation_sigma_deg, 1e-4, 90.0);
   s.real("backend.tilt_sigma_deg", &b.tilt_sigma_deg, 0.0, 90.0);
   s.integer("backend.max_solver_iterations", &b.max_solver_iterations, 1, 10000);
+  s.integer("backend.solve_window_keyframes", &b.solve_window_keyframes, 0, 100000000);
   s.real("backend.keyframe_voxel_m", &b.keyframe_voxel_m, 0.01, 10.0);
   s.real("backend.map_voxel_m", &b.map_voxel_m, 0.01, 10.0);
   s.boolean("backend.persist", &b.persist);
+  s.integer("backend.memory_keyframes", &b.memory_keyframes, 0, 1000000);
   s.text("output.pose_socket", &c.output.pose_socket);
   s.text("output.state_dir", &c.output.state_dir);
 

@@ -2,7 +2,11 @@
 
 #include <spdlog/spdlog.h>
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <exception>
+#include <filesystem>
 #include <sstream>
 
 #include "liod/backend/map_store.hpp"
@@ -11,22 +15,63 @@
 
 namespace liod {
 
-BackendWorker::BackendWorker(const Config& config) : config_(config), backend_(config) {
-  if (config.backend.persist) writer_ = std::make_unique<StateWriter>(config.output.state_dir);
+namespace {
+
+// Where keyframe clouds beyond backend.memory_keyframes go. Persisting: the state directory's
+// keyframe files, which graph.bin lists anyway (each keyframe is written once). Otherwise a
+// scratch directory under the state directory when it exists, else under the temp directory (a
+// replay as an ordinary user usually cannot write /var/lib/liod), removed at exit; if neither can be created
+// every cloud stays in memory (the backend works, only the memory bound is lost).
+std::shared_ptr<KeyframeSpill> make_spill(const Config& config) {
+  namespace fs = std::filesystem;
+  if (config.backend.persist) {
+    return std::make_shared<KeyframeDirectory>(config.output.state_dir, KeyframeDirectory::Kind::kState);
+  }
+  if (config.backend.memory_keyframes == 0) return nullptr;
+  const std::string name = "scratch-" + std::to_string(::getpid());
+  std::error_code ec;
+  for (const fs::path& dir : {fs::path(config.output.state_dir) / name, fs::temp_directory_path(ec) / ("liod-" + name)}) {
+    // A replay must not create the daemon's state directory as a side effect.
+    if (!fs::is_directory(dir.parent_path(), ec)) continue;
+    try {
+      auto spill = std::make_shared<KeyframeDirectory>(dir, KeyframeDirectory::Kind::kScratch);
+      spdlog::info("backend: keyframe clouds beyond {} in memory go to {}", config.backend.memory_keyframes, dir.string());
+      return spill;
+    } catch (const StateError& e) {
+      spdlog::debug("backend: no keyframe scratch directory here: {}", e.what());
+    }
+  }
+  spdlog::warn("backend: no writable directory for keyframe clouds; all of them stay in memory");
+  return nullptr;
 }
+
+}  // namespace
+
+BackendWorker::BackendWorker(const Config& config)
+    : config_(config),
+      // The writer first: it clears the temp files a crash left in the state directory.
+      writer_(config.backend.persist ? std::make_unique<StateWriter>(config.output.state_dir) : nullptr),
+      backend_(config, make_spill(config)) {}
 
 BackendWorker::~BackendWorker() = default;
 
 bool BackendWorker::process(const Keyframe& keyframe) {
   const std::size_t checks_before = backend_.loop_checks().size();
-  const bool closed = backend_.add_keyframe(keyframe);
+  bool closed = false;
+  try {
+    closed = backend_.add_keyframe(keyframe);
+  } catch (const std::exception& e) {
+    // A keyframe cloud that cannot be read back (its file removed or damaged) ends this loop
+    // search; the graph already holds the keyframe and the next one searches again.
+    spdlog::error("backend: keyframe {}: {}", keyframe.id, e.what());
+  }
   const auto& checks = backend_.loop_checks();
   for (std::size_t i = checks_before; i < checks.size(); ++i) {
     const LoopCheck& c = checks[i];
     const auto& kf = backend_.keyframes();
     spdlog::debug("loop candidate {} -> {}: {} (similarity {:.2f} m = max({:.2f}, {:.2f}), rms {:.3f} m, inliers {:.2f}, dz {:.2f} m, tilt "
                   "{:.2f} deg, {:.0f} ms)",
-                  kf[c.current].id, kf[c.candidate].id, to_string(c.outcome), c.similarity_m, c.similarity_forward_m,
+                  kf.id(c.current), kf.id(c.candidate), to_string(c.outcome), c.similarity_m, c.similarity_forward_m,
                   c.similarity_backward_m, c.rms_m,
                   c.inlier_fraction, c.dz_m, c.tilt_deg, c.check_ms);
   }
@@ -34,26 +79,36 @@ bool BackendWorker::process(const Keyframe& keyframe) {
     const LoopCheck& c = checks.back();
     const auto& kf = backend_.keyframes();
     spdlog::info("loop closed: keyframe {} -> {} ({:.1f} s earlier), correction now {:.2f} m, solve {:.1f} ms",
-                 kf[c.current].id, kf[c.candidate].id, kf[c.current].time - kf[c.candidate].time,
+                 kf.id(c.current), kf.id(c.candidate), kf.time(c.current) - kf.time(c.candidate),
                  backend_.correction().translation().norm(), backend_.stats().solve_ms.back());
     const Eigen::Isometry3d correction = backend_.correction();
     std::lock_guard lock(correction_mutex_);
     correction_ = correction;
   }
-  if (writer_) {
-    try {
-      writer_->save(backend_.keyframes(), backend_.graph());
-    } catch (const StateError& e) {
-      spdlog::warn("backend state not saved: {}", e.what());
-    }
-  }
+  if (writer_) save_state();
   return closed;
+}
+
+void BackendWorker::save_state() {
+  // graph.bin is the commit point and may only name complete keyframe files: after a keyframe
+  // failed to reach the state directory the last committed state stays.
+  const KeyframeStore& kf = backend_.keyframes();
+  if (kf.spill_failures() > 0) {
+    if (!state_frozen_) spdlog::warn("backend state no longer saved: a keyframe could not be written to {}", config_.output.state_dir);
+    state_frozen_ = true;
+    return;
+  }
+  try {
+    writer_->save_graph(kf.ids(), backend_.graph());
+  } catch (const StateError& e) {
+    spdlog::warn("backend state not saved: {}", e.what());
+  }
 }
 
 void BackendWorker::finish() {
   if (!writer_) return;
+  save_state();
   try {
-    writer_->save(backend_.keyframes(), backend_.graph());
     write_map_pcd(writer_->directory() / "map.pcd", backend_.global_map(config_.backend.map_voxel_m));
   } catch (const StateError& e) {
     spdlog::warn("backend state not saved: {}", e.what());
@@ -80,6 +135,9 @@ std::string BackendWorker::summary() const {
   out << "backend: loop checks median " << percentile(s.check_ms, 0.5) << " ms, max " << percentile(s.check_ms, 1.0)
       << " ms; pose-graph solves " << s.solve_ms.size() << ", median " << percentile(s.solve_ms, 0.5) << " ms, max "
       << percentile(s.solve_ms, 1.0) << " ms\n";
+  const KeyframeStore& kf = backend_.keyframes();
+  out << "backend: keyframe clouds in memory " << kf.in_memory_count() << " of " << kf.size() << ", read back from disk "
+      << kf.reads() << " times\n";
   return out.str();
 }
 

@@ -4,10 +4,15 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <random>
 
 #include "liod/backend/backend.hpp"
+#include "liod/backend/map_store.hpp"
 #include "synthetic_world.hpp"
 
 namespace {
@@ -129,6 +134,59 @@ TEST(Backend, NoLoopWithoutARevisit) {
   }
   EXPECT_EQ(backend.stats().loops_accepted, 0U);
   EXPECT_TRUE(backend.correction().isApprox(Eigen::Isometry3d::Identity(), 1e-9));
+}
+
+// Bounded memory: with 30 clouds in memory and the rest in a scratch directory, the loop checks
+// read the candidates' sub-maps back from disk, and the backend finds the same loops and the same
+// optimised poses, bit for bit, as with every cloud in memory; so does the global map.
+TEST(Backend, SameLoopsAndPosesWithMostCloudsOnDisk) {
+  const test::World world = city_block();
+  Config config;
+  config.backend.enabled = true;
+  config.backend.memory_keyframes = 30;
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("liod_backend_spill_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  Backend in_memory(config);
+  Backend spilling(config, std::make_shared<KeyframeDirectory>(dir, KeyframeDirectory::Kind::kScratch));
+  std::mt19937 rng(2);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  Eigen::Isometry3d odometry = route(0.0);
+  std::size_t most_in_memory = 0;
+  const int keyframes = 170;
+  for (int i = 0; i < keyframes; ++i) {
+    const Eigen::Isometry3d truth = route(2.0 * i);
+    if (i > 0) {
+      Eigen::Isometry3d step = route(2.0 * (i - 1)).inverse() * truth;
+      step.linear() = Eigen::AngleAxisd(0.04 * kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix() * step.linear();
+      step.translation() += Eigen::Vector3d(noise(rng), noise(rng), 0.3 * noise(rng));
+      odometry = odometry * step;
+    }
+    const Keyframe k = test::make_keyframe(world, truth, odometry, static_cast<std::uint64_t>(i), 0.2 * i);
+    EXPECT_EQ(in_memory.add_keyframe(k), spilling.add_keyframe(k)) << i;
+    most_in_memory = std::max(most_in_memory, spilling.keyframes().in_memory_count());
+  }
+  const KeyframeStore& store = spilling.keyframes();
+  std::printf("%zu loops; clouds in memory at most %zu of %zu, %zu evictions, %zu read back\n",
+              spilling.stats().loops_accepted, most_in_memory, store.size(), store.evictions(), store.reads());
+  EXPECT_GE(spilling.stats().loops_accepted, 2U);
+  EXPECT_EQ(spilling.stats().loops_accepted, in_memory.stats().loops_accepted);
+  EXPECT_EQ(spilling.stats().outcomes, in_memory.stats().outcomes);
+  EXPECT_LE(most_in_memory, 30U);
+  EXPECT_EQ(in_memory.keyframes().in_memory_count(), static_cast<std::size_t>(keyframes));
+  EXPECT_GT(store.reads(), 0U);  // the loop checks did need evicted clouds
+  const auto a = in_memory.optimized_keyframe_poses();
+  const auto b = spilling.optimized_keyframe_poses();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(std::memcmp(a[i].matrix().data(), b[i].matrix().data(), 16 * sizeof(double)), 0) << i;
+  }
+  const auto map_a = in_memory.global_map(0.3);
+  const auto map_b = spilling.global_map(0.3);
+  ASSERT_EQ(map_a.size(), map_b.size());
+  EXPECT_GT(map_a.size(), 1000U);
+  EXPECT_EQ(std::memcmp(map_a.data(), map_b.data(), map_a.size() * sizeof(Eigen::Vector3d)), 0);
+  EXPECT_EQ(store.in_memory_count(), 30U);  // the map sweep leaves the cache alone
 }
 
 }  // namespace

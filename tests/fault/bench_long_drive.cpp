@@ -1,9 +1,10 @@
 // bench_long_drive: memory and per-scan time over a long simulated drive (issue 7, resource
 // bounds). Simulates a drive once (default `liod-sim --route loop --seed 1 --duration 1800
 // --max-speed 12`, kept in build/test-data/long-drive-*/), replays it with `liod replay` in a
-// child process and prints the child's peak RSS (getrusage ru_maxrss), its RSS along the run, and
-// the front-end time per scan (deskew + features + registration, from --scan-log) in the first
-// and in the last minute of the drive. Prints figures; exits non-zero only when a step fails.
+// child process, odometry only and then with the backend on (config/examples/slam.yaml), and
+// prints for each the child's peak RSS (getrusage ru_maxrss), its RSS along the run, and the
+// front-end time per scan (deskew + features + registration, from --scan-log) in the first and
+// in the last minute of the drive. Prints figures; exits non-zero only when a step fails.
 // See docs/robustness.md.
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -123,12 +124,69 @@ void print_window(const char* name, const std::vector<ScanTiming>& scans, double
     map.push_back(s.map_ms);
   }
   const double features_median = liod::percentile(features, 0.5);
-  std::printf("%-13s %5zu scans | front end median %5.2f  p90 %5.2f  p99 %5.2f  max %6.2f ms | features median %4.2f ms, "
+  std::printf("%-17s %5zu scans | front end median %5.2f  p90 %5.2f  p99 %5.2f  max %6.2f ms | features median %4.2f ms, "
               "front end / features %4.2f | map update median %4.2f  p99 %5.2f ms\n",
               name, front.size(), liod::percentile(front, 0.5), liod::percentile(front, 0.9),
               liod::percentile(front, 0.99), liod::percentile(front, 1.0), features_median,
               features_median > 0 ? liod::percentile(front, 0.5) / features_median : 0.0, liod::percentile(map, 0.5),
               liod::percentile(map, 0.99));
+}
+
+// One replay of the drive in a child process; prints its figures. False when a step failed.
+bool replay_and_report(const fs::path& drive, bool backend) {
+  const std::string source = LIOD_SOURCE_DIR;
+  const std::string name = backend ? "backend" : "odometry";
+  std::vector<std::string> replay{std::string(LIOD_BINARY_DIR) + "/bin/liod", "replay",
+                                  "--config", source + "/config/liod.yaml",
+                                  "--config", source + "/config/vehicles/liod-sim-car.yaml",
+                                  "--config", (drive / "extrinsics.yaml").string()};
+  if (backend) {
+    // The backend's keyframe clouds beyond backend.memory_keyframes go to a scratch directory
+    // under the state directory: here, next to the drive (not /var/lib/liod).
+    const fs::path state = drive / "state";
+    fs::create_directories(state);
+    std::ofstream(drive / "bench_state_dir.yaml") << "output: {state_dir: " << state.string() << "}\n";
+    replay.insert(replay.end(), {"--config", source + "/config/examples/slam.yaml", "--config",
+                                 (drive / "bench_state_dir.yaml").string()});
+  }
+  const fs::path scan_log = drive / ("scan_log_" + name + ".csv");
+  replay.insert(replay.end(), {"--pcap", (drive / "lidar.pcap").string(), "--imu", (drive / "imu.csv").string(),
+                               "--trajectory", (drive / ("replay_" + name + ".tum")).string(), "--scan-log",
+                               scan_log.string()});
+  std::cout << "replay" << (backend ? " (backend on: config/examples/slam.yaml)" : " (odometry only)") << ":"
+            << std::endl;
+  std::vector<long> rss;
+  rusage usage{};
+  const auto start = std::chrono::steady_clock::now();
+  const int code = run_child(replay, rss, usage);
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (code != 0) {
+    std::cerr << "bench_long_drive: liod replay exited with " << code << '\n';
+    return false;
+  }
+
+  const double peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;
+  std::printf("[%s] wall time of the replay %.0f s\n", name.c_str(), wall_s);
+  std::printf("[%s] peak RSS of the replay process: %.0f MB (issue 7 bound %.0f MB: %s)\n", name.c_str(), peak_mb,
+              kRssBoundMb, peak_mb <= kRssBoundMb ? "within" : "EXCEEDED");
+  std::printf("[%s] RSS along the replay (each 10 %% of its wall time):", name.c_str());
+  for (int k = 1; k <= 10 && !rss.empty(); ++k) {
+    std::printf(" %ld", rss[std::min(rss.size() - 1, rss.size() * static_cast<std::size_t>(k) / 10)] / 1024);
+  }
+  std::printf(" MB\n");
+
+  const auto scans = read_scan_log(scan_log);
+  if (scans.size() < 1200) {
+    std::cerr << "bench_long_drive: the scan log has " << scans.size() << " scans, too few for two minutes\n";
+    return false;
+  }
+  const double first = scans.front().time;
+  const double last = scans.back().time;
+  print_window(("[" + name + "] first").c_str(), scans, first, first + 60.0);
+  print_window(("[" + name + "] last").c_str(), scans, last - 60.0, last + 1.0);
+  print_window(("[" + name + "] whole").c_str(), scans, first, last + 1.0);
+  std::fflush(stdout);
+  return true;
 }
 
 }  // namespace
@@ -140,14 +198,18 @@ int main(int argc, char** argv) {
   double minutes = 30.0;
   double max_speed = 12.0;
   std::string dir;
-  bool backend = false;
+  std::string only;
   app.add_option("--route", route, "liod-sim route")->default_val("loop");
   app.add_option("--seed", seed, "liod-sim seed")->default_val(1);
   app.add_option("--minutes", minutes, "drive length")->default_val(30.0);
   app.add_option("--max-speed", max_speed, "m/s")->default_val(12.0);
   app.add_option("--dir", dir, "where the drive is simulated and kept (default: build/test-data/long-drive-...)");
-  app.add_flag("--backend", backend, "replay with the backend (loop closure, pose graph) enabled");
+  app.add_option("--only", only, "run one replay: odometry (backend off) or backend (config/examples/slam.yaml)")
+      ->check(CLI::IsMember({"odometry", "backend"}));
+  bool backend_flag = false;
+  app.add_flag("--backend", backend_flag, "the same as --only backend");
   CLI11_PARSE(app, argc, argv);
+  if (backend_flag) only = "backend";
 
   std::ostringstream sim_args;
   sim_args << "--route " << route << " --seed " << seed << " --duration " << minutes * 60.0 << " --max-speed " << max_speed;
@@ -156,46 +218,7 @@ int main(int argc, char** argv) {
                                             std::to_string(static_cast<int>(minutes)) + "min")
                                      : fs::path(dir);
   if (!simulate(drive, sim_args.str())) return 1;
-
-  const std::string source = LIOD_SOURCE_DIR;
-  std::vector<std::string> replay{std::string(LIOD_BINARY_DIR) + "/bin/liod", "replay",
-                                  "--config", source + "/config/liod.yaml",
-                                  "--config", source + "/config/vehicles/liod-sim-car.yaml",
-                                  "--config", (drive / "extrinsics.yaml").string()};
-  if (backend) {
-    std::ofstream(drive / "backend_on.yaml") << "backend: {enabled: true}\n";
-    replay.insert(replay.end(), {"--config", (drive / "backend_on.yaml").string()});
-  }
-  const fs::path scan_log = drive / "scan_log.csv";
-  replay.insert(replay.end(), {"--pcap", (drive / "lidar.pcap").string(), "--imu", (drive / "imu.csv").string(),
-                               "--trajectory", (drive / "replay.tum").string(), "--scan-log", scan_log.string()});
-  std::cout << "replay" << (backend ? " (backend on)" : " (odometry only)") << ":" << std::endl;
-  std::vector<long> rss;
-  rusage usage{};
-  const int code = run_child(replay, rss, usage);
-  if (code != 0) {
-    std::cerr << "bench_long_drive: liod replay exited with " << code << '\n';
-    return 1;
-  }
-
-  const double peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;
-  std::printf("peak RSS of the replay process: %.0f MB (issue 7 bound %.0f MB: %s)\n", peak_mb, kRssBoundMb,
-              peak_mb <= kRssBoundMb ? "within" : "EXCEEDED");
-  std::printf("RSS along the replay (each 10 %% of its wall time):");
-  for (int k = 1; k <= 10 && !rss.empty(); ++k) {
-    std::printf(" %ld", rss[std::min(rss.size() - 1, rss.size() * static_cast<std::size_t>(k) / 10)] / 1024);
-  }
-  std::printf(" MB\n");
-
-  const auto scans = read_scan_log(scan_log);
-  if (scans.size() < 1200) {
-    std::cerr << "bench_long_drive: the scan log has " << scans.size() << " scans, too few for two minutes\n";
-    return 1;
-  }
-  const double first = scans.front().time;
-  const double last = scans.back().time;
-  print_window("first minute", scans, first, first + 60.0);
-  print_window("last minute", scans, last - 60.0, last + 1.0);
-  print_window("whole drive", scans, first, last + 1.0);
+  if (only != "backend" && !replay_and_report(drive, false)) return 1;
+  if (only != "odometry" && !replay_and_report(drive, true)) return 1;
   return 0;
 }

@@ -111,9 +111,11 @@ struct BackendConfig {
   double loop_rotation_sigma_deg = 0.5;
   double tilt_sigma_deg = 0.5;          // gravity (roll/pitch) factor per keyframe; 0 = none
   int max_solver_iterations = 50;
+  int solve_window_keyframes = 1000;    // a loop's solve frees at most this many newest keyframes; 0 = all
   double keyframe_voxel_m = 0.3;        // keyframe points kept by the backend (body frame)
   double map_voxel_m = 0.3;             // downsampling of the global map PCD
   bool persist = false;                 // write keyframes + graph to output.state_dir (atomically)
+  int memory_keyframes = 200;           // keyframe clouds kept in memory (LRU); others on disk; 0 = all in memory
 };
 
 struct OutputConfig {

@@ -43,7 +43,8 @@ Eigen::Isometry3d interpolate(const Eigen::Isometry3d& a, const Eigen::Isometry3
 
 }  // namespace
 
-Backend::Backend(const Config& config) : config_(config) {}
+Backend::Backend(const Config& config, std::shared_ptr<KeyframeSpill> spill)
+    : config_(config), keyframes_(static_cast<std::size_t>(config.backend.memory_keyframes), std::move(spill)) {}
 
 bool Backend::add_keyframe(const Keyframe& keyframe) {
   const BackendConfig& b = config_.backend;
@@ -62,7 +63,7 @@ bool Backend::add_keyframe(const Keyframe& keyframe) {
     // Between loops the graph only chains the odometry: the new node continues from its
     // predecessor's optimised pose by the odometry increment (no solve).
     const std::size_t previous = keyframes_.size() - 1;
-    const Eigen::Isometry3d increment = keyframes_.back().odometry_pose.inverse() * k.odometry_pose;
+    const Eigen::Isometry3d increment = keyframes_.odometry_pose(previous).inverse() * k.odometry_pose;
     node = graph_.add_node(graph_.pose(previous) * increment);
     PoseGraphFactor f;
     f.from = previous;
@@ -71,11 +72,9 @@ bool Backend::add_keyframe(const Keyframe& keyframe) {
     f.information = relative_pose_information(b.odometry_translation_sigma_m, b.odometry_rotation_sigma_deg * kDegToRad);
     graph_.add_factor(f);
   }
-  if (b.tilt_sigma_deg > 0.0) {
-    graph_.set_tilt(node, k.odometry_pose.linear().transpose() * Eigen::Vector3d::UnitZ(), b.tilt_sigma_deg * kDegToRad);
-  }
-  keyframes_.push_back(std::move(k));
-  times_.push_back(keyframes_.back().time);
+  const Eigen::Vector3d up = k.odometry_pose.linear().transpose() * Eigen::Vector3d::UnitZ();
+  keyframes_.add(std::move(k));
+  if (b.tilt_sigma_deg > 0.0) graph_.set_tilt(node, up, b.tilt_sigma_deg * kDegToRad);
   ++stats_.keyframes;
 
   if (cooldown_ > 0) {
@@ -88,7 +87,7 @@ bool Backend::add_keyframe(const Keyframe& keyframe) {
 bool Backend::search_loop(std::size_t current) {
   const BackendConfig& b = config_.backend;
   const auto candidates =
-      loop_candidates(graph_.poses(), times_, current, b, static_cast<std::size_t>(b.loop_candidates));
+      loop_candidates(graph_.poses(), keyframes_.times(), current, b, static_cast<std::size_t>(b.loop_candidates));
   for (const std::size_t candidate : candidates) {
     LoopCheck check = check_loop(keyframes_, graph_.poses(), current, candidate, config_);
     stats_.check_ms.push_back(check.check_ms);
@@ -120,14 +119,23 @@ bool Backend::close_loop(const LoopCheck& check) {
   };
   const std::size_t outliers_before = scale > 0.0 ? outliers() : 0;
 
-  // Initial guess with the new loop closed: its error (registered vs graph pose of the current
-  // keyframe) spread along the keyframes since the candidate. Starting the solve from there
-  // keeps a redescending (Cauchy) kernel from treating a large but true drift as an outlier.
+  // The solve's window: the keyframes since the candidate, at most solve_window_keyframes of
+  // them (0: the whole graph). Older nodes are held; the loops and odometry factors that reach
+  // into the window from them anchor it. This bounds the cost of a solve on a long drive (a full
+  // solve grew to 4 s at 13 000 keyframes); the price is that a loop with an old candidate bends
+  // only the window, not the whole stretch since the candidate.
   const std::size_t j = check.candidate;
   const std::size_t c = check.current;
+  const std::size_t window = static_cast<std::size_t>(b.solve_window_keyframes);
+  const std::size_t first_free = window == 0 ? 0 : std::max(j, c + 1 > window ? c + 1 - window : 0);
+
+  // Initial guess with the new loop closed: its error (registered vs graph pose of the current
+  // keyframe) spread along the free keyframes since the candidate. Starting the solve from there
+  // keeps a redescending (Cauchy) kernel from treating a large but true drift as an outlier.
+  const std::size_t anchor = first_free > j ? first_free - 1 : j;
   const Eigen::Isometry3d delta = check.registered * graph_.pose(c).inverse();
-  for (std::size_t k = j + 1; k <= c; ++k) {
-    const double s = static_cast<double>(k - j) / static_cast<double>(c - j);
+  for (std::size_t k = anchor + 1; k <= c; ++k) {
+    const double s = static_cast<double>(k - anchor) / static_cast<double>(c - anchor);
     graph_.set_pose(k, interpolate(Eigen::Isometry3d::Identity(), delta, s) * graph_.pose(k));
   }
   PoseGraphFactor f;
@@ -138,7 +146,7 @@ bool Backend::close_loop(const LoopCheck& check) {
   f.loop = true;
   graph_.add_factor(f);
   const SolveReport report =
-      graph_.optimize(scale > 0.0 ? RobustLoss::kCauchy : RobustLoss::kNone, scale, b.max_solver_iterations);
+      graph_.optimize(scale > 0.0 ? RobustLoss::kCauchy : RobustLoss::kNone, scale, b.max_solver_iterations, first_free);
   stats_.solve_ms.push_back(report.solve_ms);
 
   // Consistency: a loop the solution leaves beyond the kernel scale, or one that turns earlier
@@ -153,7 +161,7 @@ bool Backend::close_loop(const LoopCheck& check) {
 
 Eigen::Isometry3d Backend::correction() const {
   if (keyframes_.empty()) return Eigen::Isometry3d::Identity();
-  return graph_.poses().back() * keyframes_.back().odometry_pose.inverse();
+  return graph_.poses().back() * keyframes_.odometry_pose(keyframes_.size() - 1).inverse();
 }
 
 std::vector<NavState> Backend::corrected_trajectory(const std::vector<NavState>& odometry_poses) const {
@@ -161,20 +169,21 @@ std::vector<NavState> Backend::corrected_trajectory(const std::vector<NavState>&
   if (keyframes_.empty()) return out;
   std::vector<Eigen::Isometry3d> corrections(keyframes_.size());
   for (std::size_t k = 0; k < keyframes_.size(); ++k) {
-    corrections[k] = graph_.pose(k) * keyframes_[k].odometry_pose.inverse();
+    corrections[k] = graph_.pose(k) * keyframes_.odometry_pose(k).inverse();
   }
+  const std::vector<double>& times = keyframes_.times();
   for (auto& s : out) {
-    const auto it = std::upper_bound(times_.begin(), times_.end(), s.time);
+    const auto it = std::upper_bound(times.begin(), times.end(), s.time);
     Eigen::Isometry3d c;
-    if (it == times_.begin()) {
+    if (it == times.begin()) {
       c = corrections.front();
-    } else if (it == times_.end()) {
+    } else if (it == times.end()) {
       c = corrections.back();
     } else {
-      const auto k1 = static_cast<std::size_t>(it - times_.begin());
+      const auto k1 = static_cast<std::size_t>(it - times.begin());
       const std::size_t k0 = k1 - 1;
-      const double span = times_[k1] - times_[k0];
-      const double a = span > 0.0 ? (s.time - times_[k0]) / span : 0.0;
+      const double span = times[k1] - times[k0];
+      const double a = span > 0.0 ? (s.time - times[k0]) / span : 0.0;
       c = interpolate(corrections[k0], corrections[k1], a);
     }
     s.rotation = c.linear() * s.rotation;
@@ -185,11 +194,20 @@ std::vector<NavState> Backend::corrected_trajectory(const std::vector<NavState>&
 }
 
 std::vector<Eigen::Vector3d> Backend::global_map(double voxel_m) const {
+  // voxel_downsample keeps the first point of each voxel, so downsampling the running result
+  // whenever the buffer grows gives the same map as one pass over all points, in bounded memory.
+  constexpr std::size_t kFlushPoints = 2'000'000;
   std::vector<Eigen::Vector3d> points;
+  std::size_t kept = 0;
   for (std::size_t k = 0; k < keyframes_.size(); ++k) {
     const Eigen::Isometry3d& pose = graph_.pose(k);
-    for (const auto& p : keyframes_[k].planes) points.push_back(pose * p.cast<double>());
-    for (const auto& p : keyframes_[k].edges) points.push_back(pose * p.cast<double>());
+    const auto kf = keyframes_.peek(k);
+    for (const auto& p : kf->planes) points.push_back(pose * p.cast<double>());
+    for (const auto& p : kf->edges) points.push_back(pose * p.cast<double>());
+    if (points.size() - kept > kFlushPoints) {
+      points = voxel_downsample(points, voxel_m);
+      kept = points.size();
+    }
   }
   return voxel_downsample(points, voxel_m);
 }

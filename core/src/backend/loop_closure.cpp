@@ -248,8 +248,8 @@ SimilarityResult similarity_search(const std::vector<Eigen::Vector3d>& cloud_bod
   return result;
 }
 
-LoopCheck check_loop(const std::vector<BackendKeyframe>& keyframes, const std::vector<Eigen::Isometry3d>& poses,
-                     std::size_t current, std::size_t candidate, const Config& config) {
+LoopCheck check_loop(KeyframeStore& keyframes, const std::vector<Eigen::Isometry3d>& poses, std::size_t current,
+                     std::size_t candidate, const Config& config) {
   const auto start = std::chrono::steady_clock::now();
   const BackendConfig& b = config.backend;
   LoopCheck check;
@@ -266,23 +266,26 @@ LoopCheck check_loop(const std::vector<BackendKeyframe>& keyframes, const std::v
   const std::size_t first = candidate > n ? candidate - n : 0;
   // Neighbours of the candidate only: never the recent keyframes of the current pass.
   const std::size_t last = std::min({candidate + n, current - 1, keyframes.size() - 1});
+  const auto current_kf = keyframes.get(current);
+  const auto candidate_kf = keyframes.get(candidate);
   std::vector<Eigen::Vector3d> submap_similarity;
   LocalMap plane_map(config.odometry.map_voxel_m, config.odometry.map_points_per_voxel,
                      config.odometry.map_min_point_spacing_m);
   LocalMap edge_map = plane_map;
   for (std::size_t k = first; k <= last; ++k) {
-    if (keyframes[current].time - keyframes[k].time < b.loop_time_gap_s) continue;
-    const auto sim = to_world(keyframes[k].similarity, poses[k]);
+    if (keyframes.time(current) - keyframes.time(k) < b.loop_time_gap_s) continue;
+    const auto kf = keyframes.get(k);
+    const auto sim = to_world(kf->similarity, poses[k]);
     submap_similarity.insert(submap_similarity.end(), sim.begin(), sim.end());
-    plane_map.add(to_world(keyframes[k].planes, poses[k]), keyframes[k].id);
-    edge_map.add(to_world(keyframes[k].edges, poses[k]), keyframes[k].id);
+    plane_map.add(to_world(kf->planes, poses[k]), kf->id);
+    edge_map.add(to_world(kf->edges, poses[k]), kf->id);
   }
 
   const Eigen::Isometry3d guess = poses[current];
   Eigen::Isometry3d initial = guess;
   if (b.similarity_check) {
-    const auto similarity = similarity_search(to_double(keyframes[current].similarity), guess, submap_similarity,
-                                              to_world(keyframes[candidate].similarity, poses[candidate]), b);
+    const auto similarity = similarity_search(to_double(current_kf->similarity), guess, submap_similarity,
+                                              to_world(candidate_kf->similarity, poses[candidate]), b);
     check.similarity_m = similarity.distance_m;
     check.similarity_forward_m = similarity.forward_m;
     check.similarity_backward_m = similarity.backward_m;
@@ -300,8 +303,8 @@ LoopCheck check_loop(const std::vector<BackendKeyframe>& keyframes, const std::v
   StateCovariance weak = StateCovariance::Identity();
   weak.diagonal().segment<3>(0).setConstant(std::pow(5.0 * kDegToRad, 2));
   weak.diagonal().segment<3>(3).setConstant(2.0 * 2.0);
-  std::vector<Eigen::Vector3d> planes = voxel_downsample(to_double(keyframes[current].planes), config.odometry.plane_voxel_m);
-  std::vector<Eigen::Vector3d> edges = voxel_downsample(to_double(keyframes[current].edges), config.odometry.edge_voxel_m);
+  std::vector<Eigen::Vector3d> planes = voxel_downsample(to_double(current_kf->planes), config.odometry.plane_voxel_m);
+  std::vector<Eigen::Vector3d> edges = voxel_downsample(to_double(current_kf->edges), config.odometry.edge_voxel_m);
   NavState x;
   x.rotation = initial.linear();
   x.position = initial.translation();
@@ -358,6 +361,13 @@ LoopCheck check_loop(const std::vector<BackendKeyframe>& keyframes, const std::v
   }
   check.measured = poses[candidate].inverse() * registered;
   return done(LoopOutcome::kAccepted);
+}
+
+LoopCheck check_loop(const std::vector<BackendKeyframe>& keyframes, const std::vector<Eigen::Isometry3d>& poses,
+                     std::size_t current, std::size_t candidate, const Config& config) {
+  KeyframeStore store(0, nullptr);
+  for (const auto& k : keyframes) store.add(k);
+  return check_loop(store, poses, current, candidate, config);
 }
 
 }  // namespace liod

@@ -139,9 +139,7 @@ void fsync_directory(const fs::path& dir) {
   if (rc != 0) throw StateError(dir.string() + ": fsync of the directory failed (" + errno_text() + ")");
 }
 
-}  // namespace
-
-void write_file_atomically(const fs::path& path, std::string_view bytes) {
+void write_file(const fs::path& path, std::string_view bytes, bool durable) {
   const fs::path temp = path.string() + ".tmp";
   const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw StateError(temp.string() + ": cannot create (" + errno_text() + ")");
@@ -157,7 +155,7 @@ void write_file_atomically(const fs::path& path, std::string_view bytes) {
     done += static_cast<std::size_t>(n);
   }
   // Data on disk before the rename makes it visible; the directory fsync makes the rename durable.
-  if (::fsync(fd) != 0) {
+  if (durable && ::fsync(fd) != 0) {
     const std::string why = errno_text();
     ::close(fd);
     throw StateError(temp.string() + ": fsync failed (" + why + ")");
@@ -166,8 +164,12 @@ void write_file_atomically(const fs::path& path, std::string_view bytes) {
   if (::rename(temp.c_str(), path.c_str()) != 0) {
     throw StateError(path.string() + ": rename from the temp file failed (" + errno_text() + ")");
   }
-  fsync_directory(path.has_parent_path() ? path.parent_path() : fs::path("."));
+  if (durable) fsync_directory(path.has_parent_path() ? path.parent_path() : fs::path("."));
 }
+
+}  // namespace
+
+void write_file_atomically(const fs::path& path, std::string_view bytes) { write_file(path, bytes, true); }
 
 void write_map_pcd(const fs::path& path, const std::vector<Eigen::Vector3d>& points) {
   std::ostringstream header;
@@ -194,28 +196,74 @@ StateWriter::StateWriter(fs::path directory) : directory_(std::move(directory)) 
   }
 }
 
+void write_keyframe_file(const fs::path& directory, const BackendKeyframe& k, bool durable) {
+  Writer w;
+  w.raw(kKeyframeMagic, 8);
+  w.put(kVersion);
+  w.put(std::uint32_t{0});
+  w.put(k.id);
+  w.put(k.time);
+  w.pose(k.odometry_pose);
+  w.points(k.planes);
+  w.points(k.edges);
+  w.points(k.similarity);
+  write_file(keyframe_path(directory, k.id), w.finish(), durable);
+}
+
+BackendKeyframe read_keyframe_file(const fs::path& directory, std::uint64_t id) {
+  const fs::path path = keyframe_path(directory, id);
+  if (!fs::exists(path)) throw StateError(path.string() + ": missing");
+  Reader k(read_all(path), path);
+  k.check(kKeyframeMagic);
+  BackendKeyframe kf;
+  kf.id = k.get<std::uint64_t>();
+  if (kf.id != id) k.fail("holds keyframe " + std::to_string(kf.id) + ", expected " + std::to_string(id));
+  kf.time = k.get<double>();
+  kf.odometry_pose = k.pose();
+  kf.planes = k.points();
+  kf.edges = k.points();
+  kf.similarity = k.points();
+  k.done();
+  return kf;
+}
+
+KeyframeDirectory::KeyframeDirectory(fs::path directory, Kind kind) : directory_(std::move(directory)), kind_(kind) {
+  std::error_code ec;
+  fs::create_directories(directory_ / "keyframes", ec);
+  if (ec) throw StateError(directory_.string() + ": cannot create the keyframe directory (" + ec.message() + ")");
+}
+
+KeyframeDirectory::~KeyframeDirectory() {
+  if (kind_ != Kind::kScratch) return;
+  std::error_code ec;  // best effort: a scratch directory left behind is only wasted space
+  fs::remove_all(directory_, ec);
+}
+
+void KeyframeDirectory::write(const BackendKeyframe& keyframe) {
+  // Scratch files need no fsync: they only have to survive until this process reads them back.
+  write_keyframe_file(directory_, keyframe, kind_ == Kind::kState);
+}
+
+BackendKeyframe KeyframeDirectory::read(std::uint64_t id) const { return read_keyframe_file(directory_, id); }
+
 void StateWriter::save(const std::vector<BackendKeyframe>& keyframes, const PoseGraph& graph) {
   for (; keyframes_written_ < keyframes.size(); ++keyframes_written_) {
-    const BackendKeyframe& k = keyframes[keyframes_written_];
-    Writer w;
-    w.raw(kKeyframeMagic, 8);
-    w.put(kVersion);
-    w.put(std::uint32_t{0});
-    w.put(k.id);
-    w.put(k.time);
-    w.pose(k.odometry_pose);
-    w.points(k.planes);
-    w.points(k.edges);
-    w.points(k.similarity);
-    write_file_atomically(keyframe_path(directory_, k.id), w.finish());
+    write_keyframe_file(directory_, keyframes[keyframes_written_], true);
   }
+  std::vector<std::uint64_t> ids;
+  ids.reserve(keyframes.size());
+  for (const auto& k : keyframes) ids.push_back(k.id);
+  save_graph(ids, graph);
+}
+
+void StateWriter::save_graph(const std::vector<std::uint64_t>& ids, const PoseGraph& graph) {
   Writer w;
   w.raw(kGraphMagic, 8);
   w.put(kVersion);
   w.put(std::uint32_t{0});
-  w.put(static_cast<std::uint64_t>(keyframes.size()));
-  for (std::size_t i = 0; i < keyframes.size(); ++i) {
-    w.put(keyframes[i].id);
+  w.put(static_cast<std::uint64_t>(ids.size()));
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    w.put(ids[i]);
     w.pose(graph.pose(i));
   }
   w.put(static_cast<std::uint64_t>(graph.factors().size()));
@@ -257,18 +305,7 @@ PersistedState load_state(const fs::path& directory) {
   for (std::uint64_t i = 0; i < nodes; ++i) {
     const fs::path path = keyframe_path(directory, ids[i]);
     if (!fs::exists(path)) throw StateError(path.string() + ": missing, but listed in " + graph_path.string());
-    Reader k(read_all(path), path);
-    k.check(kKeyframeMagic);
-    BackendKeyframe kf;
-    kf.id = k.get<std::uint64_t>();
-    if (kf.id != ids[i]) k.fail("holds keyframe " + std::to_string(kf.id) + ", expected " + std::to_string(ids[i]));
-    kf.time = k.get<double>();
-    kf.odometry_pose = k.pose();
-    kf.planes = k.points();
-    kf.edges = k.points();
-    kf.similarity = k.points();
-    k.done();
-    state.keyframes.push_back(std::move(kf));
+    state.keyframes.push_back(read_keyframe_file(directory, ids[i]));
   }
   return state;
 }

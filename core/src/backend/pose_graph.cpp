@@ -4,6 +4,7 @@
 #include <ceres/version.h>
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -103,7 +104,7 @@ double PoseGraph::whitened_error(const PoseGraphFactor& f) const {
   return r.norm();
 }
 
-SolveReport PoseGraph::optimize(RobustLoss loss, double scale, int max_iterations) {
+SolveReport PoseGraph::optimize(RobustLoss loss, double scale, int max_iterations, std::size_t first_free) {
   const auto start = std::chrono::steady_clock::now();
   SolveReport report;
   if (loss == RobustLoss::kCauchy && scale > 0.0) {
@@ -111,22 +112,22 @@ SolveReport PoseGraph::optimize(RobustLoss loss, double scale, int max_iteration
     // bounded force from a far-off start, then the redescending Cauchy kernel, under which a loop
     // that the others contradict loses its influence (Cauchy alone, started far away, can
     // ignore true loops as well).
-    const SolveReport huber = solve(RobustLoss::kHuber, scale, max_iterations);
-    report = solve(RobustLoss::kCauchy, scale, max_iterations);
+    const SolveReport huber = solve(RobustLoss::kHuber, scale, max_iterations, first_free);
+    report = solve(RobustLoss::kCauchy, scale, max_iterations, first_free);
     report.initial_cost = huber.initial_cost;
     report.iterations += huber.iterations;
   } else {
-    report = solve(loss, scale, max_iterations);
+    report = solve(loss, scale, max_iterations, first_free);
   }
   report.solve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return report;
 }
 
-SolveReport PoseGraph::solve(RobustLoss loss, double scale, int max_iterations) {
+SolveReport PoseGraph::solve(RobustLoss loss, double scale, int max_iterations, std::size_t first_free) {
   SolveReport report;
-  report.nodes = poses_.size();
-  report.factors = factors_.size();
-  if (poses_.size() < 2) return report;
+  first_free = std::max<std::size_t>(first_free, 1);  // node 0 is the prior: always held
+  if (poses_.size() <= first_free) return report;
+  report.nodes = poses_.size() - first_free;
 
   // Parameter blocks: Eigen's quaternion layout (x, y, z, w) and the translation, per node.
   std::vector<Eigen::Quaterniond> q(poses_.size());
@@ -145,9 +146,20 @@ SolveReport PoseGraph::solve(RobustLoss loss, double scale, int max_iterations) 
   ceres::EigenQuaternionParameterization quaternion_manifold;
 #endif
   ceres::Problem problem(problem_options);
-  for (std::size_t i = 0; i < poses_.size(); ++i) {
+  // A node enters the problem once: free nodes with their manifold and tilt factor, held ones
+  // (node 0, the prior that fixes the gauge, and in a windowed solve the nodes before the
+  // window, where the factors into the window anchor it) as constants.
+  std::vector<char> added(poses_.size(), 0);
+  auto add_node_blocks = [&](std::size_t i) {
+    if (added[i]) return;
+    added[i] = 1;
     problem.AddParameterBlock(q[i].coeffs().data(), 4);
     problem.AddParameterBlock(p[i].data(), 3);
+    if (i < first_free) {
+      problem.SetParameterBlockConstant(q[i].coeffs().data());
+      problem.SetParameterBlockConstant(p[i].data());
+      return;
+    }
 #if LIOD_CERES_HAS_MANIFOLD
     problem.SetManifold(q[i].coeffs().data(), &quaternion_manifold);
 #else
@@ -157,12 +169,15 @@ SolveReport PoseGraph::solve(RobustLoss loss, double scale, int max_iterations) 
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<TiltError, 3, 4>(new TiltError(tilt_up_[i], tilt_sigma_[i])),
                                nullptr, q[i].coeffs().data());
     }
-  }
-  // The prior on the first pose: held exactly, it fixes the gauge (world frame = the odometry's).
-  problem.SetParameterBlockConstant(q[0].coeffs().data());
-  problem.SetParameterBlockConstant(p[0].data());
+  };
+  if (first_free == 1) add_node_blocks(0);  // the full graph: blocks in node order
+  for (std::size_t i = first_free; i < poses_.size(); ++i) add_node_blocks(i);
 
   for (const auto& f : factors_) {
+    if (f.from < first_free && f.to < first_free) continue;  // between held nodes: a constant
+    add_node_blocks(f.from);
+    add_node_blocks(f.to);
+    ++report.factors;
     ceres::LossFunction* robust = nullptr;
     if (f.loop && scale > 0.0) {
       // Scales are in sigmas of the whitened residual; Ceres' kernels take the squared norm, so
@@ -184,7 +199,7 @@ SolveReport PoseGraph::solve(RobustLoss loss, double scale, int max_iterations) 
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
 
-  for (std::size_t i = 0; i < poses_.size(); ++i) {
+  for (std::size_t i = first_free; i < poses_.size(); ++i) {
     poses_[i].linear() = q[i].normalized().toRotationMatrix();
     poses_[i].translation() = p[i];
   }

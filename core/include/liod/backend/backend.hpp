@@ -11,8 +11,10 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
+#include "liod/backend/keyframe_store.hpp"
 #include "liod/backend/loop_closure.hpp"
 #include "liod/backend/pose_graph.hpp"
 #include "liod/config.hpp"
@@ -32,7 +34,9 @@ struct BackendStats {
 
 class Backend {
  public:
-  explicit Backend(const Config& config);
+  /// `spill`: where keyframe clouds go beyond backend.memory_keyframes (nullptr: all stay in
+  /// memory; the daemon passes a KeyframeDirectory, map_store.hpp).
+  explicit Backend(const Config& config, std::shared_ptr<KeyframeSpill> spill = nullptr);
 
   /// Adds a keyframe (its points are in the odometry's world frame, as the front end keeps
   /// them); returns true when it closed a loop (and the graph was re-optimised).
@@ -48,12 +52,13 @@ class Backend {
   std::vector<NavState> corrected_trajectory(const std::vector<NavState>& odometry_poses) const;
 
   /// Every keyframe's points (planes and edges) at the optimised poses, voxel-downsampled.
+  /// Spilled clouds are read one at a time, so the memory is the map's, not the drive's.
   std::vector<Eigen::Vector3d> global_map(double voxel_m) const;
 
   const BackendStats& stats() const { return stats_; }
   /// Every verified candidate, in order (for logs and tests).
   const std::vector<LoopCheck>& loop_checks() const { return checks_; }
-  const std::vector<BackendKeyframe>& keyframes() const { return keyframes_; }
+  const KeyframeStore& keyframes() const { return keyframes_; }
   const PoseGraph& graph() const { return graph_; }
 
  private:
@@ -62,8 +67,7 @@ class Backend {
 
   Config config_;
   PoseGraph graph_;
-  std::vector<BackendKeyframe> keyframes_;
-  std::vector<double> times_;
+  KeyframeStore keyframes_;
   std::vector<LoopCheck> checks_;
   BackendStats stats_;
   int cooldown_ = 0;

@@ -18,20 +18,10 @@
 #include <string>
 #include <vector>
 
+#include "liod/backend/keyframe_store.hpp"
 #include "liod/config.hpp"
 
 namespace liod {
-
-/// The backend's copy of a keyframe: points in its own body frame (so that a pose-graph update
-/// moves them for free), stored as floats at the backend's resolution.
-struct BackendKeyframe {
-  std::uint64_t id = 0;
-  double time = 0.0;
-  Eigen::Isometry3d odometry_pose = Eigen::Isometry3d::Identity();  // T_odom_body from the front end
-  std::vector<Eigen::Vector3f> planes;      // body frame, map density
-  std::vector<Eigen::Vector3f> edges;
-  std::vector<Eigen::Vector3f> similarity;  // the front end's Hausdorff cloud (sparse)
-};
 
 /// Node indices of the loop candidates of node `current`, nearest first (at most `limit`).
 std::vector<std::size_t> loop_candidates(const std::vector<Eigen::Isometry3d>& poses, const std::vector<double>& times,
@@ -93,7 +83,11 @@ struct LoopCheck {
 
 /// Verifies one candidate: similarity (if enabled), registration of the current keyframe's
 /// body points into the candidate's sub-map, fit limits, vertical check. `poses` are the graph's
-/// current estimates; `keyframes` the stored keyframes, index = node.
+/// current estimates; `keyframes` the stored keyframes, index = node (only the current one and
+/// the candidate's sub-map are read, through the store's cache).
+LoopCheck check_loop(KeyframeStore& keyframes, const std::vector<Eigen::Isometry3d>& poses, std::size_t current,
+                     std::size_t candidate, const Config& config);
+/// The same on keyframes all in memory (tests).
 LoopCheck check_loop(const std::vector<BackendKeyframe>& keyframes, const std::vector<Eigen::Isometry3d>& poses,
                      std::size_t current, std::size_t candidate, const Config& config);
 

@@ -13,12 +13,13 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <stdexcept>
 #include <string_view>
 #include <vector>
 
-#include "liod/backend/loop_closure.hpp"
+#include "liod/backend/keyframe_store.hpp"
 #include "liod/backend/pose_graph.hpp"
 
 namespace liod {
@@ -36,6 +37,33 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view b
 /// Writes points as a binary PCD (FIELDS x y z, float) atomically.
 void write_map_pcd(const std::filesystem::path& path, const std::vector<Eigen::Vector3d>& points);
 
+/// Writes `keyframes/<id>.kf` under `directory` (the format load_state reads); `durable`: fsync
+/// the file and the directory (a state directory), else only write-then-rename (scratch).
+void write_keyframe_file(const std::filesystem::path& directory, const BackendKeyframe& keyframe, bool durable);
+/// Reads and validates `keyframes/<id>.kf`. Throws StateError naming the file.
+BackendKeyframe read_keyframe_file(const std::filesystem::path& directory, std::uint64_t id);
+
+/// The keyframe store's spill in a directory: `keyframes/<id>.kf` files. In the state directory
+/// (backend.persist) they are the persisted keyframes that graph.bin lists (durable writes); as
+/// scratch (persistence off) the directory is created on construction and removed on
+/// destruction.
+class KeyframeDirectory final : public KeyframeSpill {
+ public:
+  enum class Kind { kState, kScratch };
+  /// Creates the directory (and keyframes/); throws StateError when it cannot.
+  KeyframeDirectory(std::filesystem::path directory, Kind kind);
+  ~KeyframeDirectory() override;
+  KeyframeDirectory(const KeyframeDirectory&) = delete;
+  KeyframeDirectory& operator=(const KeyframeDirectory&) = delete;
+  void write(const BackendKeyframe& keyframe) override;
+  BackendKeyframe read(std::uint64_t id) const override;
+  const std::filesystem::path& directory() const { return directory_; }
+
+ private:
+  std::filesystem::path directory_;
+  Kind kind_;
+};
+
 struct PersistedState {
   std::vector<BackendKeyframe> keyframes;      // in node order
   std::vector<Eigen::Isometry3d> poses;        // optimised T_world_body per node
@@ -48,6 +76,9 @@ class StateWriter {
   /// Creates the directory (and keyframes/) if needed and removes temp files a crash left.
   explicit StateWriter(std::filesystem::path directory);
   void save(const std::vector<BackendKeyframe>& keyframes, const PoseGraph& graph);
+  /// Writes graph.bin only, naming keyframes `ids` whose files are already in the directory (a
+  /// KeyframeDirectory on it wrote them as they arrived).
+  void save_graph(const std::vector<std::uint64_t>& ids, const PoseGraph& graph);
   const std::filesystem::path& directory() const { return directory_; }
 
  private:

@@ -35,8 +35,8 @@ struct SolveReport {
   double initial_cost = 0.0;
   double final_cost = 0.0;
   bool converged = false;
-  std::size_t nodes = 0;
-  std::size_t factors = 0;
+  std::size_t nodes = 0;    // nodes optimised (not held)
+  std::size_t factors = 0;  // relative-pose factors in the problem
 };
 
 class PoseGraph {
@@ -52,9 +52,11 @@ class PoseGraph {
   /// Removes the most recent factor (a loop the consistency check rejected).
   void pop_factor() { factors_.pop_back(); }
 
-  /// Full solve (Levenberg-Marquardt, sparse Cholesky) from the current poses. Loop factors get
+  /// Solve (Levenberg-Marquardt, sparse Cholesky) from the current poses. Loop factors get
   /// `loss` with `scale` in whitened units (sigmas); kCauchy runs a Huber pass first.
-  SolveReport optimize(RobustLoss loss, double scale, int max_iterations);
+  /// `first_free`: nodes before it are held at their current poses and only the factors that
+  /// reach a node from it on take part (0: the full graph; node 0 is always held).
+  SolveReport optimize(RobustLoss loss, double scale, int max_iterations, std::size_t first_free = 0);
 
   std::size_t size() const { return poses_.size(); }
   const std::vector<Eigen::Isometry3d>& poses() const { return poses_; }
@@ -65,7 +67,7 @@ class PoseGraph {
   double whitened_error(const PoseGraphFactor& factor) const;
 
  private:
-  SolveReport solve(RobustLoss loss, double scale, int max_iterations);
+  SolveReport solve(RobustLoss loss, double scale, int max_iterations, std::size_t first_free);
 
   std::vector<Eigen::Isometry3d> poses_;
   std::vector<Eigen::Vector3d> tilt_up_;

@@ -1,6 +1,7 @@
 #pragma once
 // The backend thread's work (issue 5): the pure liod::Backend plus what a live daemon needs
-// around it — persistence of keyframes/graph/map into output.state_dir (if backend.persist),
+// around it — the directory where keyframe clouds beyond backend.memory_keyframes live,
+// persistence of keyframes/graph/map into output.state_dir (if backend.persist),
 // a log line per loop, and the latest correction T_world_odom published for other threads.
 // The Pipeline's backend thread calls process() for each keyframe and finish() at the end; the
 // odometry never waits for it (the keyframe ring is lossy live), and no lock is held across an
@@ -39,9 +40,12 @@ class BackendWorker {
   std::string summary() const;
 
  private:
+  void save_state();
+
   Config config_;
-  Backend backend_;
   std::unique_ptr<StateWriter> writer_;
+  Backend backend_;
+  bool state_frozen_ = false;
   mutable std::mutex correction_mutex_;
   Eigen::Isometry3d correction_ = Eigen::Isometry3d::Identity();
 };
