@@ -249,12 +249,16 @@ Schema declare_schema(Config& c) {
   s.integer("odometry.max_iterations", &o.max_iterations, 1, 50);
   s.real("odometry.lidar_noise_m", &o.lidar_noise_m, 1e-4, 10.0);
   s.real("odometry.max_correspondence_m", &o.max_correspondence_m, 0.05, 20.0);
+  s.integer("odometry.correspondence_neighbours", &o.correspondence_neighbours, 3, 8);
+  s.real("odometry.correspondence_gate_m", &o.correspondence_gate_m, 0.05, 20.0);
+  s.real("odometry.plane_thickness_m", &o.plane_thickness_m, 1e-4, 10.0);
   s.real("odometry.keyframe_distance_m", &o.keyframe_distance_m, 0.0, 100.0);
   s.real("odometry.keyframe_angle_deg", &o.keyframe_angle_deg, 0.0, 180.0);
   s.real("odometry.hausdorff_threshold_m", &o.hausdorff_threshold_m, 0.0, 100.0);
   s.real("odometry.hausdorff_voxel_m", &o.hausdorff_voxel_m, 0.05, 10.0);
   s.integer("odometry.window_keyframes", &o.window_keyframes, 1, 1000);
   s.real("odometry.degeneracy_eigenvalue", &o.degeneracy_eigenvalue, 0.0, kInf);
+  s.boolean("odometry.degeneracy_projection", &o.degeneracy_projection);
   s.real("odometry.init_gyro_bias_std", &o.init_gyro_bias_std, 1e-6, 1.0);
   s.real("odometry.init_accel_bias_std", &o.init_accel_bias_std, 1e-6, 10.0);
   s.real("odometry.init_velocity_std", &o.init_velocity_std, 1e-3, 100.0);
@@ -379,6 +383,10 @@ void validate_relations(const Config& c, const std::string& origin) {
   }
   if (c.odometry.max_correspondence_m > c.odometry.map_voxel_m) {
     reject("odometry.max_correspondence_m", c.odometry.max_correspondence_m,
+           "must not exceed odometry.map_voxel_m (neighbours are searched in the adjacent voxels)");
+  }
+  if (c.odometry.correspondence_gate_m > c.odometry.map_voxel_m) {
+    reject("odometry.correspondence_gate_m", c.odometry.correspondence_gate_m,
            "must not exceed odometry.map_voxel_m (neighbours are searched in the adjacent voxels)");
   }
   if (c.odometry.plane_curvature >= c.odometry.edge_curvature) {

@@ -107,11 +107,10 @@ UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior
     Eigen::Matrix<double, 6, 6> projector = Eigen::Matrix<double, 6, 6>::Zero();
     degenerate_directions = 0;
     for (int i = 0; i < 6; ++i) {
-      if (eig.eigenvalues()(i) >= params.degeneracy_eigenvalue) {
+      if (eig.eigenvalues()(i) >= params.degeneracy_eigenvalue || !params.project_degenerate) {
         projector += eig.eigenvectors().col(i) * eig.eigenvectors().col(i).transpose();
-      } else {
-        ++degenerate_directions;
       }
+      if (eig.eigenvalues()(i) < params.degeneracy_eigenvalue) ++degenerate_directions;
     }
     // MAP step: (P^-1 + H^T W H) delta = -H^T W r - P^-1 (x (-) prior)   (iterated EKF).
     information = prior_information;

@@ -131,8 +131,11 @@ LidarInertialOdometry::LidarInertialOdometry(const Config& config)
   noise_.accel_bias_random_walk = config.imu.accel_bias_random_walk;
   update_params_.max_iterations = config.odometry.max_iterations;
   update_params_.lidar_noise_m = config.odometry.lidar_noise_m;
-  update_params_.correspondence.max_distance_m = config.odometry.max_correspondence_m;
+  update_params_.correspondence.neighbours = config.odometry.correspondence_neighbours;
+  update_params_.correspondence.max_distance_m = config.odometry.correspondence_gate_m;
+  update_params_.correspondence.max_plane_thickness_m = config.odometry.plane_thickness_m;
   update_params_.degeneracy_eigenvalue = config.odometry.degeneracy_eigenvalue;
+  update_params_.project_degenerate = config.odometry.degeneracy_projection;
 }
 
 void LidarInertialOdometry::add_imu(const ImuSample& sample) {

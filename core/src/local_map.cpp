@@ -136,27 +136,46 @@ int LocalMap::nearest(const Eigen::Vector3d& query, int k, double max_distance,
   const Eigen::Vector3f q = query.cast<float>();
   // Only the voxels that overlap the query's gate box can hold a neighbour: 1 to 8 of them for a
   // gate up to half a voxel, at most 27 for a gate up to a whole one (the configuration's limit).
+  // The query's own voxel goes first; once k neighbours are found, a voxel whose box lies farther
+  // than the k-th of them is skipped before its hash lookup. Same neighbours, far fewer voxels
+  // visited with a wide gate in a dense map.
+  const VoxelKey own = voxel_of(query, inverse_voxel_size_);
   const VoxelKey lo = voxel_of(query - Eigen::Vector3d::Constant(max_distance), inverse_voxel_size_);
   const VoxelKey hi = voxel_of(query + Eigen::Vector3d::Constant(max_distance), inverse_voxel_size_);
+  const float voxel_size = static_cast<float>(1.0 / inverse_voxel_size_);
+  auto box_distance2 = [&](const VoxelKey& key) {
+    // From the query to the voxel's box, per axis 0 inside it.
+    const Eigen::Vector3f box_lo(static_cast<float>(key.x) * voxel_size, static_cast<float>(key.y) * voxel_size,
+                                 static_cast<float>(key.z) * voxel_size);
+    const Eigen::Vector3f below = (box_lo - q).cwiseMax(0.0F);
+    const Eigen::Vector3f above = (q - box_lo - Eigen::Vector3f::Constant(voxel_size)).cwiseMax(0.0F);
+    return (below + above).squaredNorm();
+  };
+  auto visit = [&](const VoxelKey& key) {
+    const Voxel* voxel = find(key);
+    if (voxel == nullptr) return;
+    for (std::uint32_t j = 0; j < voxel->count; ++j) {
+      const float d2 = (voxel->points[j] - q).squaredNorm();
+      if (d2 >= worst) continue;
+      int pos = found < k ? found : k - 1;
+      while (pos > 0 && best_d2[static_cast<std::size_t>(pos - 1)] > d2) {
+        best_d2[static_cast<std::size_t>(pos)] = best_d2[static_cast<std::size_t>(pos - 1)];
+        best[static_cast<std::size_t>(pos)] = best[static_cast<std::size_t>(pos - 1)];
+        --pos;
+      }
+      best_d2[static_cast<std::size_t>(pos)] = d2;
+      best[static_cast<std::size_t>(pos)] = voxel->points[j];
+      if (found < k) ++found;
+      if (found == k) worst = best_d2[static_cast<std::size_t>(k - 1)];
+    }
+  };
+  visit(own);
   for (int dx = lo.x; dx <= hi.x; ++dx) {
     for (int dy = lo.y; dy <= hi.y; ++dy) {
       for (int dz = lo.z; dz <= hi.z; ++dz) {
-        const Voxel* voxel = find({dx, dy, dz});
-        if (voxel == nullptr) continue;
-        for (std::uint32_t j = 0; j < voxel->count; ++j) {
-          const float d2 = (voxel->points[j] - q).squaredNorm();
-          if (d2 >= worst) continue;
-          int pos = found < k ? found : k - 1;
-          while (pos > 0 && best_d2[static_cast<std::size_t>(pos - 1)] > d2) {
-            best_d2[static_cast<std::size_t>(pos)] = best_d2[static_cast<std::size_t>(pos - 1)];
-            best[static_cast<std::size_t>(pos)] = best[static_cast<std::size_t>(pos - 1)];
-            --pos;
-          }
-          best_d2[static_cast<std::size_t>(pos)] = d2;
-          best[static_cast<std::size_t>(pos)] = voxel->points[j];
-          if (found < k) ++found;
-          if (found == k) worst = best_d2[static_cast<std::size_t>(k - 1)];
-        }
+        const VoxelKey key{dx, dy, dz};
+        if (key == own || box_distance2(key) >= worst) continue;
+        visit(key);
       }
     }
   }

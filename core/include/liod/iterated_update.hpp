@@ -25,6 +25,8 @@ struct UpdateParams {
   /// Directions of the LiDAR information (eigenvalues of sum w h^T h, i.e. a weighted count of
   /// residuals) below this carry no LiDAR update: the prior holds them.
   double degeneracy_eigenvalue = 30.0;
+  /// Whether those directions are also removed from the LiDAR update (else they are only counted).
+  bool project_degenerate = true;
 };
 
 struct UpdateResult {
