@@ -315,6 +315,7 @@ Scene make_city(const SceneRequest& req, Rng& rng, bool loop_route) {
         plan.speed_cap[i] = pace;
       }
       prev = at[k];
+      if (at[k] >= lane.size()) continue;  // a corner the lane never passes near (read past the end before)
       const double sj = s_lane[at[k]];
       for (std::size_t i = 0; i < lane.size(); ++i) {
         if (std::abs(s_lane[i] - sj) < 12.0) {
