@@ -1,20 +1,23 @@
 #!/usr/bin/env bash
-# Runs liod's whole test suite from a fresh clone: installs what is missing, builds the decoding
-# and algorithm tests with AddressSanitizer + UndefinedBehaviorSanitizer and runs them, fuzzes
-# every parser of outside bytes briefly, then builds the Release tree (tests, tools, benchmarks)
-# and runs every test.
+# Runs liod's whole test suite from a fresh clone: installs what is missing, builds every test
+# with AddressSanitizer + UndefinedBehaviorSanitizer and runs them, the threaded ones with
+# ThreadSanitizer, fuzzes every parser of outside bytes briefly, then builds the Release tree
+# (tests, tools, benchmarks) and runs every test.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
 
 bash scripts/install-deps.sh
 
-# Sanitizers: the code that parses untrusted bytes and the algorithm's core.
-sanitized=(test_drivers test_core test_config)
+# AddressSanitizer + UndefinedBehaviorSanitizer: every test, the fault-injection drives included
+# (the benchmarks and the Release-only figures are in the Release tree below).
+sanitized=(test_drivers test_core test_config test_odometry test_backend test_eval test_sim test_daemon test_fault)
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLIOD_SANITIZE="address;undefined" >/dev/null
-cmake --build build-asan -j"$jobs" --target "${sanitized[@]}"
+cmake --build build-asan -j"$jobs" --target "${sanitized[@]}" liod-sim liod  # liod: the systemd unit test verifies it
+# Left out: ClockJump's live run at recorded pace, which ASan slows below real time (its pose-jump
+# bound then fails on IMU-rate poses dead-reckoned over the backlog); TSan and Release run it.
 (cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-   ctest --output-on-failure -j"$jobs" -L "$(IFS='|'; echo "${sanitized[*]}")")
+   ctest --output-on-failure -j"$jobs" -L "$(IFS='|'; echo "${sanitized[*]}")" -E 'ClockJump\.LidarAndImuSteps')
 
 # ThreadSanitizer: the daemon's rings, pose socket and pipeline threads (ClockJump: the live
 # pipeline with IMU-rate poses made on the IMU thread).
