@@ -17,13 +17,14 @@ namespace liod {
 
 bool PaceClock::wait_until(std::int64_t data_ns, const std::atomic<bool>& stop, const std::function<void()>& heartbeat) const {
   if (pace <= 0.0) return !stop.load(std::memory_order_relaxed);
+  const std::int64_t now = steady_ns();
   // In double: a corrupt capture time may be anywhere in the int64 range.
   const double data_offset = (static_cast<double>(data_ns) - static_cast<double>(data_start_ns)) / pace;
   const double ahead = static_cast<double>(host_start_steady_ns) + data_offset +
-                       static_cast<double>(shift_ns_.load(std::memory_order_relaxed)) - static_cast<double>(steady_ns());
+                       static_cast<double>(shift_ns_.load(std::memory_order_relaxed)) - static_cast<double>(now);
   if (!std::isfinite(ahead) || std::abs(ahead) > static_cast<double>(max_offset_ns)) {
     // Due now from here on. The other source moves it back if its data did not jump.
-    const double shift = static_cast<double>(steady_ns() - host_start_steady_ns) - data_offset;
+    const double shift = static_cast<double>(now - host_start_steady_ns) - data_offset;
     const double limit = 4e18;
     shift_ns_.store(static_cast<std::int64_t>(std::clamp(shift, -limit, limit)), std::memory_order_relaxed);
     if (reanchors_.fetch_add(1, std::memory_order_relaxed) < 5) {
@@ -32,7 +33,7 @@ bool PaceClock::wait_until(std::int64_t data_ns, const std::atomic<bool>& stop, 
     }
     return !stop.load(std::memory_order_relaxed);
   }
-  const auto due = steady_ns() + static_cast<std::int64_t>(ahead);
+  const auto due = now + static_cast<std::int64_t>(ahead);
   for (;;) {
     if (stop.load(std::memory_order_relaxed)) return false;
     const std::int64_t left = due - steady_ns();
