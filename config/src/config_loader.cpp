@@ -342,6 +342,7 @@ Schema declare_schema(Config& c) {
   s.integer("pose_socket.max_clients", &c.pose_socket.max_clients, 1, 4096);
   s.integer("pose_socket.client_buffer_bytes", &c.pose_socket.client_buffer_bytes, 4096, 1 << 28);
   s.real("pose_socket.stuck_timeout_s", &c.pose_socket.stuck_timeout_s, 0.01, 3600.0);
+  s.real("pose_socket.imu_rate_horizon_s", &c.pose_socket.imu_rate_horizon_s, 0.01, 10.0);
   s.boolean("pose_socket.imu_rate", &c.pose_socket.imu_rate);
   s.real("pose_socket.health_interval_s", &c.pose_socket.health_interval_s, 0.05, 3600.0);
   s.real("pose_socket.health_log_interval_s", &c.pose_socket.health_log_interval_s, 0.0, 86400.0);

@@ -272,6 +272,7 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
       // Report the attitude only; the pose follows once the speed is known.
       result.state = state_;
       result.covariance = covariance_;
+      result.status |= kStatusSpeedUnknown;
       return result;
     }
   }

@@ -230,6 +230,13 @@ bool Pipeline::make_imu_pose(const ImuItem& item, PoseEvent& ev) {
   const auto state = propagator_.add(item.sample);
   if (!state) return false;
   const ScanAnchor& anchor = *propagator_.anchor();
+  // Dead reckoning drifts with the square of time and more: when the scan updates fall behind
+  // (an overloaded CPU, a LiDAR that stopped) the pose stops rather than runs away, and the
+  // next pose after the gap starts from a fresh scan update instead of jumping back to it.
+  if (state->time - anchor.state.time > config_.pose_socket.imu_rate_horizon_s) {
+    imu_poses_withheld_.fetch_add(1, std::memory_order_relaxed);
+    return false;
+  }
   ev.message.type = pose::MessageType::ImuPose;
   fill_state(ev.message, *state);
   ev.message.angular_rate = item.sample.gyro - state->gyro_bias;
@@ -316,9 +323,10 @@ void Pipeline::odometry_thread() {
     ev.process_start_ns = start_ns;
     ev.process_end_ns = steady_ns();
     push_pose(ev);
-    if (imu_poses) {
+    if (imu_poses && !(result->status & kStatusSpeedUnknown)) {
       // IMU-rate poses are as (un)reliable as the scan they start from: while it is initialising
-      // (a rolling start's speed is not known yet) they are not usable either.
+      // they are flagged so; before any speed is known (the first scan) there are none: dead
+      // reckoning at zero speed from a rolling start would run away.
       const ScanAnchor anchor{result->state, odometry.gravity(), ev.message.covariance,
                               scan_flags & (pose::kInitializing | pose::kDegenerate | pose::kFewFeatures)};
       if (lockstep) propagator_.set_anchor(anchor);
@@ -517,7 +525,8 @@ std::string Pipeline::health_json(HealthRates& rates) const {
     << imu_out_->transport.refused.load() << ",\"out_of_order\":" << imu_out_->out_of_order()
     << ",\"odometry_dropped\":" << odometry_imu_dropped_.load() << ",\"pps_correction_s\":" << static_cast<double>(imu_out_->pps_correction_ns.load()) * 1e-9
     << "},\"odometry\":{\"scans\":" << scans << ",\"scan_rate_hz\":" << rate(scans, rates.scans)
-    << ",\"last_process_ms\":" << last_process_ms_.load() << "},\"rings\":{";
+    << ",\"last_process_ms\":" << last_process_ms_.load() << ",\"imu_poses_withheld\":" << imu_poses_withheld_.load()
+    << "},\"rings\":{";
   ring("scan", scan_ring_);
   j << ',';
   ring("imu", imu_ring_);

@@ -23,13 +23,21 @@ namespace {
 
 constexpr std::int64_t kSecond = 1000000000;
 
-#if defined(__SANITIZE_THREAD__)
 // Under ThreadSanitizer the odometry runs about a hundred times slower than the data: its poses
-// come seconds late, the IMU ring overflows and IMU-rate poses dead-reckon from stale scan
-// updates. What is checked there is the threads' interplay, the detection and the flags.
-constexpr bool kOdometryKeepsUp = false;
+// come seconds late and may differ from the undisturbed replay. What is checked there is the
+// threads' interplay, the detection and the flags.
+#if defined(__SANITIZE_THREAD__)
+constexpr bool kSameEstimates = false;
 #else
-constexpr bool kOdometryKeepsUp = true;
+constexpr bool kSameEstimates = true;
+#endif
+// Under AddressSanitizer it runs a few times slower than the data: the estimates are the same,
+// but late, so IMU-rate poses are withheld past pose_socket.imu_rate_horizon_s (or all of them,
+// when the first scan update comes after the last IMU sample).
+#if defined(__SANITIZE_THREAD__) || defined(__SANITIZE_ADDRESS__)
+constexpr bool kRealTime = false;
+#else
+constexpr bool kRealTime = true;
 #endif
 
 /// The drive's pcap at its pace, MSOP header times moved by `step_ns` from data time `at_ns` on.
@@ -119,7 +127,7 @@ TEST(ClockJump, LidarAndImuStepsAreTakenOutAndFlagged) {
   const std::string imu = (*drive / "imu.csv").string();
 
   auto pace = std::make_shared<PaceClock>();
-  pace->pace = 2.0;
+  pace->pace = kRealTime ? 2.0 : 0.5;  // under ASan, slow enough for the odometry to keep up mostly
   pace->data_start_ns = std::min(first_pcap_time_ns(pcap, {6699, 7788}), first_imu_time_ns(imu));
   const std::int64_t lidar_step_at = pace->data_start_ns + 3 * kSecond;
   const std::int64_t imu_step_at = pace->data_start_ns + 5 * kSecond;
@@ -154,7 +162,7 @@ TEST(ClockJump, LidarAndImuStepsAreTakenOutAndFlagged) {
   ASSERT_FALSE(got.scans.empty());
   std::size_t on_reference_time = 0, flagged_after = 0, flagged_before = 0;
   for (const auto& p : got.scans) {
-    if (kOdometryKeepsUp) {
+    if (kSameEstimates) {
       EXPECT_LT((p.position - reference_at(ref, p.time)).norm(), 0.3) << "scan pose at " << p.time;
     }
     // Within 10 µs: across the step the packets are taken to keep their spacing, which the
@@ -164,7 +172,7 @@ TEST(ClockJump, LidarAndImuStepsAreTakenOutAndFlagged) {
     if (p.time > lidar_step_time + 0.2) flagged_after += flagged ? 1 : 0;
     if (p.time < lidar_step_time - 0.2) flagged_before += flagged ? 1 : 0;
   }
-  if (kOdometryKeepsUp) {
+  if (kSameEstimates) {
     EXPECT_GE(got.scans.size(), ref.size() - 1);
     EXPECT_LE(got.scans.size(), ref.size() + 2);
     EXPECT_GE(on_reference_time, ref.size() - 3);  // every scan but those the step cut ends on time
@@ -174,14 +182,44 @@ TEST(ClockJump, LidarAndImuStepsAreTakenOutAndFlagged) {
   // The flag outlives the last step by time.jump_flag_s (10 s): every pose after the first is flagged.
   EXPECT_TRUE(got.scans.back().flags & pose::kClockJump);
 
-  // IMU-rate poses: time always forward, position continuous (12 m/s: centimetres per sample)
-  // once the start-up is over (the rolling start finds the speed on the second scan, and the
-  // dead reckoning at zero speed before it jumps to the registered pose).
-  ASSERT_GT(got.imu.size(), 1000U);
-  for (std::size_t k = 1; k < got.imu.size(); ++k) {
-    ASSERT_GT(got.imu[k].time, got.imu[k - 1].time) << "IMU pose " << k;
-    ASSERT_LT(got.imu[k].time - got.imu[k - 1].time, 0.05) << "IMU pose " << k;
-    if (!kOdometryKeepsUp || got.imu[k].time < got.scans.front().time + 2.0) continue;
-    ASSERT_LT((got.imu[k].position - got.imu[k - 1].position).norm(), 0.3) << "IMU pose " << k << " at " << got.imu[k].time;
+  // IMU-rate poses: time always forward; once initialised, on the trajectory and continuous
+  // (12 m/s: centimetres per sample). Where the odometry falls behind (a slow build, a loaded
+  // CPU) they pause past pose_socket.imu_rate_horizon_s rather than dead-reckon away, so this
+  // holds however late the scan updates come; the pauses are counted in health.
+  // Every IMU sample after the first scan update is either a pose or counted as withheld.
+  const auto withheld_at = health.find("\"imu_poses_withheld\":");
+  ASSERT_NE(withheld_at, std::string::npos) << health;
+  const auto withheld = std::stoul(health.substr(withheld_at + 21));
+  if (kRealTime) ASSERT_GT(got.imu.size() + withheld, 1400U) << health;
+  // A pose flagged ok is one a controller may use; the others (initialising, or dead reckoning
+  // longer than drivers.lidar.lost_after_s) must not be wild either.
+  double worst_ok = 0.0, worst_flagged = 0.0, worst_step_ok = 0.0, worst_step = 0.0;
+  std::size_t pauses = 0;
+  for (std::size_t k = 0; k < got.imu.size(); ++k) {
+    const auto& p = got.imu[k];
+    const bool initializing = (p.flags & pose::kInitializing) != 0;
+    if (!initializing && p.time <= ref.back().t) {
+      const double error = (p.position - reference_at(ref, p.time)).norm();
+      (p.flags & pose::kOk ? worst_ok : worst_flagged) = std::max(p.flags & pose::kOk ? worst_ok : worst_flagged, error);
+    }
+    if (k == 0) continue;
+    const auto& before = got.imu[k - 1];
+    ASSERT_GT(p.time, before.time) << "IMU pose " << k;
+    if (p.time - before.time > 0.05) ++pauses;
+    else if (!initializing && (before.flags & pose::kInitializing) == 0) {
+      const double step = (p.position - before.position).norm();
+      worst_step = std::max(worst_step, step);
+      if (p.flags & before.flags & pose::kOk) worst_step_ok = std::max(worst_step_ok, step);
+    }
   }
+  std::printf("IMU-rate poses: %zu, %lu withheld, %zu pauses; worst error %.3f m ok, %.3f m flagged; "
+              "worst step %.3f m ok, %.3f m any\n",
+              got.imu.size(), withheld, pauses, worst_ok, worst_flagged, worst_step_ok, worst_step);
+  if (kSameEstimates) {
+    EXPECT_LT(worst_ok, 0.3);
+    EXPECT_LT(worst_step_ok, 0.3);
+    EXPECT_LT(worst_flagged, 1.0);
+    EXPECT_LT(worst_step, 1.0);
+  }
+  if (pauses > 0) EXPECT_GT(withheld, 0U) << "a pause in the IMU-rate poses that health does not account for";
 }

@@ -172,11 +172,15 @@ TEST(FaultInjection, LidarStopTwoSeconds) {
   const auto o = common_checks(*drive, run, "LiDAR silent for 2 s", 12.0);
   EXPECT_LE(o.after.rmse_m, kMaxAteM);
   EXPECT_EQ(count_flag(run.poses, kScan, 0, drive->at(10.1), drive->at(12.0)).poses, 0U);
-  // IMU-rate poses go on, flagged once no sweep came for drivers.lidar.lost_after_s (0.5 s).
-  const auto lost = count_flag(run.poses, kImu, pose::kLidarLost, drive->at(10.7), drive->at(12.0));
+  // IMU-rate poses go on, flagged once no sweep came for drivers.lidar.lost_after_s (0.5 s), and
+  // pause pose_socket.imu_rate_horizon_s (1 s) after the last scan update rather than drift on.
+  const auto lost = count_flag(run.poses, kImu, pose::kLidarLost, drive->at(10.6), drive->at(10.95));
   print_flags("IMU-rate poses flagged lidar_lost during the stop", lost);
-  EXPECT_GT(lost.poses, 200U);
+  EXPECT_GT(lost.poses, 50U);
   EXPECT_EQ(lost.flagged, lost.poses);
+  const auto paused = count_flag(run.poses, kImu, 0, drive->at(11.05), drive->at(12.0));
+  print_flags("IMU-rate poses 1.05-2 s into the stop", paused);
+  EXPECT_EQ(paused.poses, 0U);
   EXPECT_EQ(count_flag(run.poses, kImu, pose::kLidarLost, 0.0, drive->at(10.4)).flagged, 0U);
   EXPECT_EQ(count_flag(run.poses, kImu, pose::kLidarLost, drive->at(12.3), 1e300).flagged, 0U);
   expect_ok_from(*drive, run, 12.2, "LiDAR stop");

@@ -209,6 +209,7 @@ struct PoseSocketConfig {
   int client_buffer_bytes = 262144; // a client further behind than this skips messages
   double stuck_timeout_s = 2.0;     // a client that accepts nothing for this long is disconnected
   bool imu_rate = true;             // also publish IMU-rate poses
+  double imu_rate_horizon_s = 1.0;  // no IMU-rate pose more than this after the last scan update (data time)
   double health_interval_s = 1.0;   // health message period on the socket
   double health_log_interval_s = 10.0;  // health line period in the log
 };

@@ -26,6 +26,7 @@ enum OdometryStatus : std::uint32_t {
   kStatusKeyframe = 1U << 2,
   kStatusImuGap = 1U << 3,
   kStatusFewFeatures = 1U << 4,
+  kStatusSpeedUnknown = 1U << 5,  // the first scan: attitude and origin only, the speed comes with the next
 };
 
 struct Keyframe {

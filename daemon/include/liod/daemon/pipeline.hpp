@@ -223,6 +223,7 @@ class Pipeline {
   std::atomic<double> last_process_ms_{0.0};
   LatencyStats scan_latency_, imu_latency_, scan_receive_, scan_wait_, scan_process_, scan_publish_;
   std::atomic<std::uint64_t> socket_clients_{0}, socket_skipped_{0}, socket_dropped_{0};
+  std::atomic<std::uint64_t> imu_poses_withheld_{0};  // past pose_socket.imu_rate_horizon_s
   mutable std::mutex error_mutex_;
   std::string error_;
 };
