@@ -2,7 +2,11 @@
 
 #include <spdlog/spdlog.h>
 
+#include <signal.h>
 #include <unistd.h>
+
+#include <cerrno>
+#include <charconv>
 
 #include <algorithm>
 #include <exception>
@@ -17,6 +21,26 @@ namespace liod {
 
 namespace {
 
+// A process killed outright (SIGKILL, power loss) leaves its scratch directory behind; the next
+// start removes those whose process is gone. A live process's, or one that cannot be told, stays.
+void remove_orphaned_scratch(const std::filesystem::path& parent, std::string_view prefix) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  for (fs::directory_iterator it(parent, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.rfind(prefix, 0) != 0 || !it->is_directory(ec)) continue;
+    int pid = 0;
+    const char* digits = name.data() + prefix.size();
+    const auto [rest, err] = std::from_chars(digits, name.data() + name.size(), pid);
+    if (err != std::errc() || rest != name.data() + name.size() || pid <= 0 || pid == ::getpid()) continue;
+    if (::kill(pid, 0) == 0 || errno != ESRCH) continue;
+    std::error_code rm;
+    const auto removed = fs::remove_all(it->path(), rm);
+    if (rm) spdlog::warn("backend: could not remove {} left by process {}: {}", it->path().string(), pid, rm.message());
+    else spdlog::info("backend: removed {} ({} files) left by process {}", it->path().string(), removed, pid);
+  }
+}
+
 // Where keyframe clouds beyond backend.memory_keyframes go. Persisting: the state directory's
 // keyframe files, which graph.bin lists anyway (each keyframe is written once). Otherwise a
 // scratch directory under the state directory when it exists, else under the temp directory (a
@@ -28,11 +52,14 @@ std::shared_ptr<KeyframeSpill> make_spill(const Config& config) {
     return std::make_shared<KeyframeDirectory>(config.output.state_dir, KeyframeDirectory::Kind::kState);
   }
   if (config.backend.memory_keyframes == 0) return nullptr;
-  const std::string name = "scratch-" + std::to_string(::getpid());
   std::error_code ec;
-  for (const fs::path& dir : {fs::path(config.output.state_dir) / name, fs::temp_directory_path(ec) / ("liod-" + name)}) {
+  const std::pair<fs::path, std::string> places[] = {{fs::path(config.output.state_dir), "scratch-"},
+                                                      {fs::temp_directory_path(ec), "liod-scratch-"}};
+  for (const auto& [parent, prefix] : places) {
     // A replay must not create the daemon's state directory as a side effect.
-    if (!fs::is_directory(dir.parent_path(), ec)) continue;
+    if (parent.empty() || !fs::is_directory(parent, ec)) continue;
+    remove_orphaned_scratch(parent, prefix);
+    const fs::path dir = parent / (prefix + std::to_string(::getpid()));
     try {
       auto spill = std::make_shared<KeyframeDirectory>(dir, KeyframeDirectory::Kind::kScratch);
       spdlog::info("backend: keyframe clouds beyond {} in memory go to {}", config.backend.memory_keyframes, dir.string());

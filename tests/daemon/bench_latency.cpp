@@ -7,7 +7,11 @@
 // Scan latency is printed for all scans and for the steady state: the first 2 s of poses are the
 // start-up (gravity alignment, the rolling start's speed search, the map restarted once the speed
 // is known), each a one-off several times the cost of a scan.
-// Usage: bench_latency [DRIVE_DIR]   (default: generates a 30 s drive with liod-sim into /tmp)
+// With the backend on (--config config/examples/slam.yaml) it also shows what the backend costs
+// the odometry on the same cores: compare the odometry stage with a run without it, on a drive
+// that closes loops (e.g. liod-sim --route loop --duration 120).
+// Usage: bench_latency [--drive DIR] [--config FILE]...
+//   (default drive: a 30 s urban drive generated with liod-sim into /tmp)
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
@@ -16,6 +20,8 @@
 #include <map>
 #include <string>
 #include <thread>
+
+#include <CLI/CLI.hpp>
 
 #include "udp_sender.hpp"
 #include "liod/config.hpp"
@@ -47,14 +53,23 @@ void print_stage(const char* name, const LatencyStats::Summary& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::filesystem::path drive = argc > 1 ? argv[1] : "/tmp/liod-bench-drive-30s";
+  CLI::App app{"liod latency benchmark: a drive over loopback UDP at recorded pace"};
+  std::filesystem::path drive = "/tmp/liod-bench-drive-30s";
+  std::vector<std::string> extra_configs;
+  app.add_option("--drive", drive, "liod-sim output directory (generated if absent)");
+  app.add_option("--config", extra_configs, "config file layered after config/liod.yaml (repeatable)");
+  CLI11_PARSE(app, argc, argv);
   if (!std::filesystem::exists(drive / "lidar.pcap")) {
     std::filesystem::create_directories(drive);
     const std::string cmd = std::string(LIOD_BINARY_DIR) + "/bin/liod-sim --route urban --seed 3 --duration 30 --max-speed 12 --out " + drive.string();
     std::printf("generating the drive: %s\n", cmd.c_str());
     if (std::system(cmd.c_str()) != 0) return 1;
   }
-  Config config = load_config({std::string(LIOD_SOURCE_DIR) + "/config/liod.yaml", (drive / "extrinsics.yaml").string()});
+  std::vector<std::string> files{std::string(LIOD_SOURCE_DIR) + "/config/liod.yaml"};
+  files.insert(files.end(), extra_configs.begin(), extra_configs.end());
+  files.push_back((drive / "extrinsics.yaml").string());
+  Config config = load_config(files);
+  config.backend.persist = false;  // a benchmark leaves no state behind
   const auto port = static_cast<std::uint16_t>(50000 + ::getpid() % 5000 * 2);
   config.lidar.msop_port = port;
   config.lidar.difop_port = port + 1;
@@ -164,5 +179,7 @@ int main(int argc, char** argv) {
   std::printf("IMU latency, sample in -> IMU-rate pose written (pipeline): median %.1f us, p99 %.1f us, max %.1f us (n=%zu)\n",
               il.median_us, il.p99_us, il.max_us, il.count);
   std::printf("load average after: %s\n", load_average().c_str());
+  pipeline.join();
+  if (auto* backend = pipeline.backend()) std::printf("%s", backend->summary().c_str());
   return 0;
 }
