@@ -16,6 +16,7 @@
 #include "liod/imu_trajectory.hpp"
 #include "liod/iterated_update.hpp"
 #include "liod/local_map.hpp"
+#include "liod/speed_search.hpp"
 #include "liod/types.hpp"
 
 namespace liod {
@@ -84,7 +85,13 @@ class LidarInertialOdometry {
     std::vector<Eigen::Vector3d> edges;
     std::vector<Eigen::Vector3d> map_planes;  // what a keyframe adds to the map (denser)
   };
+  struct TimedPoint {
+    double time;           // IMU clock
+    Eigen::Vector3d body;  // IMU frame at that time
+  };
   void initialize(const Scan& scan, OdometryResult& result);
+  std::vector<TimedPoint> vertical_structure_points(const Scan& scan) const;
+
   bool initialize_velocity(const Scan& first, const Scan& second);
   void process_scan(const Scan& scan, OdometryResult& result);
   PoseTable deskew_trajectory(const Scan& scan, const NavState& start, const NavState& predicted_end,

@@ -1,0 +1,63 @@
+#pragma once
+// A rolling start's speed by exhaustive search: every speed hypothesis along the vehicle's
+// forward axis deskews and places two scans, and the one under which their vertical structure,
+// seen from above, overlaps best wins (correlative scan matching, Olson 2009, reduced to the one
+// unknown a road vehicle's IMU leaves at start: attitude comes from gravity, the turn from the
+// gyro, and a car moves along its own axis).
+//
+// Why not a local registration: on sparse roads most returns are ground rings, which move with
+// the sensor, so a standstill fits them best and a gradient method started from a wrong speed
+// stays near zero. A flat ground says nothing about a horizontal motion anyway: only posts,
+// poles, trees and wall ends do, and their footprints from above do not depend on which ring
+// hit them, so they are compared in 2-D.
+
+#include <Eigen/Core>
+#include <functional>
+#include <vector>
+
+#include "liod/local_map.hpp"
+
+namespace liod {
+
+struct VerticalStructureParams {
+  double cell_m = 0.5;               // bird's-eye cells in which the height spread is measured
+  double min_height_spread_m = 0.3;  // less than this in a cell is ground (a ring or two), or nothing
+  double ground_clearance_m = 0.2;   // points this close above a cell's lowest one are its ground
+};
+
+/// Indices of the points (gravity-aligned frame, z up) on vertical structure: in bird's-eye cells
+/// whose points span at least min_height_spread_m in height, and above the cell's ground.
+std::vector<std::size_t> vertical_structure(const std::vector<Eigen::Vector3d>& points,
+                                            const VerticalStructureParams& params);
+
+/// How well a cloud's footprint (x, y of a gravity-aligned frame) lands on a reference footprint:
+/// the sum over the query points of 1 - (d / radius)^2 for the horizontal distance d to the
+/// nearest reference point within radius (a truncated quadratic, so that the score is smooth in
+/// the motion near the optimum and blind to outliers).
+class FootprintOverlap {
+ public:
+  FootprintOverlap(const std::vector<Eigen::Vector3d>& reference, double radius);
+  double score(const std::vector<Eigen::Vector3d>& query) const;
+
+ private:
+  double radius_;
+  LocalMap footprint_;
+};
+
+struct GridSearchResult {
+  double value = 0.0;
+  double score = 0.0;
+};
+
+struct GridSearchParams {
+  double min = 0.0;
+  double max = 0.0;
+  double coarse_step = 1.0;
+  double fine_step = 0.1;  // around the best coarse hypothesis
+};
+
+/// Maximises score(x) over a coarse grid on [min, max], then over a fine grid around the best
+/// coarse cell. Exhaustive, so that a score with several local maxima (periodic posts) is safe.
+GridSearchResult grid_search(const std::function<double(double)>& score, const GridSearchParams& params);
+
+}  // namespace liod
