@@ -236,6 +236,7 @@ Schema declare_schema(Config& c) {
   s.real("odometry.max_range_m", &o.max_range_m, 5.0, 500.0);
   s.vector3("odometry.crop_box_min_m", &o.crop_box_min_m, 50.0);
   s.vector3("odometry.crop_box_max_m", &o.crop_box_max_m, 50.0);
+  s.vector3("odometry.forward_axis", &o.forward_axis, 1.0);
   s.real("odometry.occlusion_jump_m", &o.occlusion_jump_m, 0.01, 10.0);
   s.real("odometry.edge_curvature", &o.edge_curvature, 0.0, 10.0);
   s.real("odometry.plane_curvature", &o.plane_curvature, 0.0, 10.0);
@@ -389,6 +390,10 @@ void validate_relations(const Config& c, const std::string& origin) {
   if (c.odometry.correspondence_gate_m > c.odometry.map_voxel_m) {
     reject("odometry.correspondence_gate_m", c.odometry.correspondence_gate_m,
            "must not exceed odometry.map_voxel_m (neighbours are searched in the adjacent voxels)");
+  }
+  if (std::abs(c.odometry.forward_axis.norm() - 1.0) > 0.01) {
+    reject("odometry.forward_axis", c.odometry.forward_axis.norm(),
+           "must be a unit vector, the vehicle's forward direction in the IMU frame (the value shown is its length)");
   }
   if (c.odometry.plane_curvature >= c.odometry.edge_curvature) {
     reject("odometry.plane_curvature", c.odometry.plane_curvature, "must be below odometry.edge_curvature");

@@ -324,8 +324,7 @@ std::vector<LidarInertialOdometry::TimedPoint> LidarInertialOdometry::vertical_s
 
 bool LidarInertialOdometry::initialize_velocity(const Scan& first, const Scan& second) {
   // A vehicle that may already be moving: the speed is what makes the second scan land on the
-  // first. Each hypothesis (along the body's forward axis, x, from the gravity-aligned attitude:
-  // a car does not slide sideways)
+  // first. Each hypothesis (a speed along odometry.forward_axis: a car does not slide sideways)
   // deskews both scans with the IMU and places them in one frame; their vertical structure is
   // compared from above (speed_search.hpp explains why not the ground, and why not a local
   // registration).
@@ -342,7 +341,7 @@ bool LidarInertialOdometry::initialize_velocity(const Scan& first, const Scan& s
   };
   auto start_at = [&](double speed) {
     NavState start = base;
-    start.velocity = base.rotation * Eigen::Vector3d(speed, 0.0, 0.0);
+    start.velocity = base.rotation * (speed * config_.odometry.forward_axis);
     return start;
   };
   auto score = [&](double speed) {

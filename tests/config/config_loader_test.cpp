@@ -65,6 +65,12 @@ TEST(ConfigLoader, QuaternionMustBeUnitAndListsNeedTheirLength) {
   EXPECT_NE(error_of("extrinsics:\n  lidar_to_imu:\n    translation_m: [1, 2]\n").find("3 numbers"), std::string::npos);
 }
 
+TEST(ConfigLoader, ForwardAxisMustBeUnitAndHorizonPositive) {
+  EXPECT_NE(error_of("odometry:\n  forward_axis: [0.5, 0, 0]\n").find("odometry.forward_axis"), std::string::npos);
+  EXPECT_EQ(error_of("odometry:\n  forward_axis: [0, -1, 0]\n"), "");  // an IMU mounted with y to the rear
+  EXPECT_NE(error_of("pose_socket:\n  imu_rate_horizon_s: 0\n").find("pose_socket.imu_rate_horizon_s"), std::string::npos);
+}
+
 TEST(ConfigLoader, LaterFilesOverrideEarlierOnes) {
   const auto base = write_temp("liod_base.yaml", "odometry:\n  max_iterations: 7\nlidar:\n  msop_port: 7000\n");
   const auto overlay = write_temp("liod_overlay.yaml",

@@ -59,6 +59,9 @@ struct OdometryConfig {
   Eigen::Vector3d crop_box_min_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d crop_box_max_m = Eigen::Vector3d::Zero();
   double max_range_m = 120.0;
+  /// The vehicle's forward direction in the body (IMU) frame, a unit vector: a rolling start
+  /// searches its speed along it (a road vehicle does not slide sideways).
+  Eigen::Vector3d forward_axis = Eigen::Vector3d::UnitX();
   double occlusion_jump_m = 0.5;     // neighbour range jump that marks an occlusion edge (scaled by range)
   double edge_curvature = 0.2;       // c above this: edge candidate
   double plane_curvature = 0.05;     // c below this: planar candidate
