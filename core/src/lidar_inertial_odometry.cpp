@@ -121,6 +121,24 @@ void widen_for_imu_gaps(StateCovariance& p, const std::vector<TimeSpan>& gaps) {
   p.block<3, 3>(6, 6) += i * a2 * gap * gap;               // v += a t
 }
 
+// Zeroes the cross-covariance between the accelerometer bias along `axis` (body frame, unit) and
+// the rest of the state: pose residuals then cannot move that bias component, and its variance
+// stays as it was (the other components and the state's own covariances are untouched).
+void decouple_accel_bias_along(StateCovariance& p, const Eigen::Vector3d& axis) {
+  Eigen::Matrix3d basis;  // columns: axis, then two directions across it
+  basis.col(0) = axis;
+  basis.col(1) = axis.unitOrthogonal();
+  basis.col(2) = axis.cross(basis.col(1));
+  StateCovariance to_axis = StateCovariance::Identity();
+  to_axis.block<3, 3>(12, 12) = basis.transpose();
+  StateCovariance c = to_axis * p * to_axis.transpose();
+  const double variance = c(12, 12);
+  c.row(12).setZero();
+  c.col(12).setZero();
+  c(12, 12) = variance;
+  p = to_axis.transpose() * c * to_axis;
+}
+
 }  // namespace
 
 LidarInertialOdometry::LidarInertialOdometry(const Config& config)
@@ -362,6 +380,7 @@ bool LidarInertialOdometry::initialize_velocity(const Scan& first, const Scan& s
   // restarts once the filter has the speed, as before.
   const double speed_std = 0.5;
   covariance_.block<3, 3>(6, 6) = Eigen::Matrix3d::Identity() * speed_std * speed_std;
+  hold_forward_accel_bias_ = std::abs(found.value) > 2.0 * speed_std;  // moving for sure
   covariance_.block<3, 3>(6, 0).setZero();
   covariance_.block<3, 3>(0, 6).setZero();
   return true;
@@ -402,6 +421,14 @@ void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& resul
     state_ = predicted;
     covariance_ = predicted_covariance;
   } else {
+    // Rolling start on a road without along-track structure (highway: smallest translation
+    // eigenvalue 0.1-2, against ~400 in town): the first maps' ground rings pull each scan
+    // towards the previous keyframes (a standstill) by 0.1-0.2 m a scan, and with nothing to
+    // tell the two apart the filter took that as a forward accelerometer bias of 0.5-0.8 m/s^2
+    // (the simulated one is -0.1) and the speed decayed through zero. A static start learns that bias while
+    // standing; a rolling start keeps its prior (init_accel_bias_std) until a scan constrains the
+    // along-track position, the velocity taking the corrections meanwhile.
+    if (hold_forward_accel_bias_) decouple_accel_bias_along(predicted_covariance, config_.odometry.forward_axis);
     UpdateResult update = iterated_update(predicted, predicted_covariance, features.planes, plane_map_, features.edges,
                                           edge_map_, update_params_);
     if (velocity_std(predicted_covariance) > kTrustedVelocityStd && config_.odometry.deskew == DeskewMode::kImu) {
@@ -415,6 +442,7 @@ void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& resul
       update = iterated_update(predicted, predicted_covariance, features.planes, plane_map_, features.edges, edge_map_,
                                update_params_);
     }
+    if (update.min_translation_eigenvalue >= config_.odometry.degeneracy_eigenvalue) hold_forward_accel_bias_ = false;
     state_ = update.state;
     state_.time = t_end;
     covariance_ = update.covariance;
