@@ -425,9 +425,9 @@ void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& resul
     // eigenvalue 0.1-2, against ~400 in town): the first maps' ground rings pull each scan
     // towards the previous keyframes (a standstill) by 0.1-0.2 m a scan, and with nothing to
     // tell the two apart the filter took that as a forward accelerometer bias of 0.5-0.8 m/s^2
-    // (the simulated one is -0.1) and the speed decayed through zero. A static start learns that bias while
-    // standing; a rolling start keeps its prior (init_accel_bias_std) until a scan constrains the
-    // along-track position, the velocity taking the corrections meanwhile.
+    // (the simulated one is -0.1) and the speed decayed through zero. A static start learns that
+    // bias while standing; a rolling start keeps its prior (init_accel_bias_std) until a scan
+    // constrains the along-track position, the velocity taking the corrections meanwhile.
     if (hold_forward_accel_bias_) decouple_accel_bias_along(predicted_covariance, config_.odometry.forward_axis);
     UpdateResult update = iterated_update(predicted, predicted_covariance, features.planes, plane_map_, features.edges,
                                           edge_map_, update_params_);
