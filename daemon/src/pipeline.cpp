@@ -230,10 +230,11 @@ bool Pipeline::make_imu_pose(const ImuItem& item, PoseEvent& ev) {
   const auto state = propagator_.add(item.sample);
   if (!state) return false;
   const ScanAnchor& anchor = *propagator_.anchor();
+  const double dead_reckoned_s = state->time - anchor.state.time;
   // Dead reckoning drifts with the square of time and more: when the scan updates fall behind
   // (an overloaded CPU, a LiDAR that stopped) the pose stops rather than runs away, and the
   // next pose after the gap starts from a fresh scan update instead of jumping back to it.
-  if (state->time - anchor.state.time > config_.pose_socket.imu_rate_horizon_s) {
+  if (dead_reckoned_s > config_.pose_socket.imu_rate_horizon_s) {
     imu_poses_withheld_.fetch_add(1, std::memory_order_relaxed);
     return false;
   }
@@ -242,7 +243,7 @@ bool Pipeline::make_imu_pose(const ImuItem& item, PoseEvent& ev) {
   ev.message.angular_rate = item.sample.gyro - state->gyro_bias;
   ev.message.covariance = anchor.pose_covariance;  // of the last scan update (not propagated)
   std::uint32_t f = anchor.flags;
-  if (state->time - anchor.state.time > config_.drivers.lidar.lost_after_s) f |= pose::kLidarLost;
+  if (dead_reckoned_s > config_.drivers.lidar.lost_after_s) f |= pose::kLidarLost;
   ev.message.flags = with_ok(f | live_flags(state->time));
   ev.input_steady_ns = item.arrival_steady_ns;
   return true;
