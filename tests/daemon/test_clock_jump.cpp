@@ -205,8 +205,8 @@ TEST(ClockJump, LidarAndImuStepsAreTakenOutAndFlagged) {
     const auto& p = got.imu[k];
     const bool initializing = (p.flags & pose::kInitializing) != 0;
     if (!initializing && p.time <= ref.back().t) {
-      const double error = (p.position - reference_at(ref, p.time)).norm();
-      (p.flags & pose::kOk ? worst_ok : worst_flagged) = std::max(p.flags & pose::kOk ? worst_ok : worst_flagged, error);
+      double& worst = (p.flags & pose::kOk) ? worst_ok : worst_flagged;
+      worst = std::max(worst, (p.position - reference_at(ref, p.time)).norm());
     }
     if (k == 0) continue;
     const auto& before = got.imu[k - 1];
