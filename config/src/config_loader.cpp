@@ -237,6 +237,8 @@ Schema declare_schema(Config& c) {
   s.vector3("odometry.crop_box_min_m", &o.crop_box_min_m, 50.0);
   s.vector3("odometry.crop_box_max_m", &o.crop_box_max_m, 50.0);
   s.vector3("odometry.forward_axis", &o.forward_axis, 1.0);
+  s.vector3("odometry.up_axis", &o.up_axis, 1.0);
+  s.real("odometry.vertical_velocity_std_mps", &o.vertical_velocity_std_mps, 0.0, 10.0);
   s.real("odometry.occlusion_jump_m", &o.occlusion_jump_m, 0.01, 10.0);
   s.real("odometry.edge_curvature", &o.edge_curvature, 0.0, 10.0);
   s.real("odometry.plane_curvature", &o.plane_curvature, 0.0, 10.0);
@@ -394,6 +396,14 @@ void validate_relations(const Config& c, const std::string& origin) {
   if (std::abs(c.odometry.forward_axis.norm() - 1.0) > 0.01) {
     reject("odometry.forward_axis", c.odometry.forward_axis.norm(),
            "must be a unit vector, the vehicle's forward direction in the IMU frame (the value shown is its length)");
+  }
+  if (std::abs(c.odometry.up_axis.norm() - 1.0) > 0.01) {
+    reject("odometry.up_axis", c.odometry.up_axis.norm(),
+           "must be a unit vector, the vehicle's up direction in the IMU frame (the value shown is its length)");
+  }
+  if (std::abs(c.odometry.up_axis.dot(c.odometry.forward_axis)) > 0.02) {
+    reject("odometry.up_axis", c.odometry.up_axis.dot(c.odometry.forward_axis),
+           "must be orthogonal to odometry.forward_axis (the value shown is their dot product)");
   }
   if (c.odometry.plane_curvature >= c.odometry.edge_curvature) {
     reject("odometry.plane_curvature", c.odometry.plane_curvature, "must be below odometry.edge_curvature");

@@ -75,6 +75,20 @@ void accumulate(const std::vector<Eigen::Vector3d>& points_body, const NavState&
   }
 }
 
+// Adds the vehicle constraint u^T R^T v = 0 to the MAP normal equations. With R = R^ Exp(dtheta),
+// R^T v = (I - [dtheta]x) R^T v, so d/d dtheta = u^T [v_b]x and d/d dv = u^T R^T.
+void add_vertical_velocity_constraint(const NavState& x, const UpdateParams& params, StateCovariance& information,
+                                      Vector15& rhs) {
+  const Eigen::Vector3d velocity_body = x.rotation.transpose() * x.velocity;
+  Eigen::Matrix<double, 1, 15> h = Eigen::Matrix<double, 1, 15>::Zero();
+  h.segment<3>(0) = params.vertical_axis.transpose() * so3::hat(velocity_body);
+  h.segment<3>(6) = params.vertical_axis.transpose() * x.rotation.transpose();
+  const double r = params.vertical_axis.dot(velocity_body);
+  const double inv_var = 1.0 / (params.vertical_velocity_std * params.vertical_velocity_std);
+  information.noalias() += inv_var * h.transpose() * h;
+  rhs.noalias() -= inv_var * h.transpose() * r;
+}
+
 }  // namespace
 
 UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior_covariance,
@@ -117,6 +131,7 @@ UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior
     information.topLeftCorner<6, 6>() += inv_var * projector * eq.hessian * projector;
     Vector15 rhs = -prior_information * boxminus(x, prior);
     rhs.head<6>() -= inv_var * projector * eq.gradient;
+    if (params.vertical_velocity_std > 0.0) add_vertical_velocity_constraint(x, params, information, rhs);
     const Vector15 delta = information.ldlt().solve(rhs);
     if (!delta.allFinite()) break;
     x = boxplus(x, delta);

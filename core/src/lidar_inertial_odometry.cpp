@@ -160,6 +160,8 @@ LidarInertialOdometry::LidarInertialOdometry(const Config& config)
   update_params_.correspondence.max_plane_thickness_m = config.odometry.plane_thickness_m;
   update_params_.degeneracy_eigenvalue = config.odometry.degeneracy_eigenvalue;
   update_params_.project_degenerate = config.odometry.degeneracy_projection;
+  update_params_.vertical_velocity_std = config.odometry.vertical_velocity_std_mps;
+  update_params_.vertical_axis = config.odometry.up_axis;
 }
 
 void LidarInertialOdometry::add_imu(const ImuSample& sample) {

@@ -68,6 +68,11 @@ TEST(ConfigLoader, QuaternionMustBeUnitAndListsNeedTheirLength) {
 TEST(ConfigLoader, ForwardAxisMustBeUnitAndHorizonPositive) {
   EXPECT_NE(error_of("odometry:\n  forward_axis: [0.5, 0, 0]\n").find("odometry.forward_axis"), std::string::npos);
   EXPECT_EQ(error_of("odometry:\n  forward_axis: [0, -1, 0]\n"), "");  // an IMU mounted with y to the rear
+  EXPECT_NE(error_of("odometry:\n  up_axis: [0, 0, 2]\n").find("odometry.up_axis"), std::string::npos);
+  EXPECT_NE(error_of("odometry:\n  up_axis: [1, 0, 0]\n").find("orthogonal"), std::string::npos);
+  EXPECT_EQ(error_of("odometry:\n  forward_axis: [0, -1, 0]\n  up_axis: [1, 0, 0]\n"), "");
+  EXPECT_NE(error_of("odometry:\n  vertical_velocity_std_mps: -0.1\n").find("odometry.vertical_velocity_std_mps"),
+            std::string::npos);
   EXPECT_NE(error_of("pose_socket:\n  imu_rate_horizon_s: 0\n").find("pose_socket.imu_rate_horizon_s"), std::string::npos);
 }
 

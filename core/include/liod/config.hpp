@@ -62,6 +62,11 @@ struct OdometryConfig {
   /// The vehicle's forward direction in the body (IMU) frame, a unit vector: a rolling start
   /// searches its speed along it (a road vehicle does not slide sideways).
   Eigen::Vector3d forward_axis = Eigen::Vector3d::UnitX();
+  /// The vehicle's up direction in the body (IMU) frame, a unit vector orthogonal to forward_axis.
+  Eigen::Vector3d up_axis = Eigen::Vector3d::UnitZ();
+  /// Std of the velocity along up_axis (a wheeled vehicle does not move along it; suspension and
+  /// bumps do a little). Ties the pitch to the direction of travel. 0: constraint off.
+  double vertical_velocity_std_mps = 0.05;
   double occlusion_jump_m = 0.5;     // neighbour range jump that marks an occlusion edge (scaled by range)
   double edge_curvature = 0.2;       // c above this: edge candidate
   double plane_curvature = 0.05;     // c below this: planar candidate

@@ -27,6 +27,10 @@ struct UpdateParams {
   double degeneracy_eigenvalue = 30.0;
   /// Whether those directions are also removed from the LiDAR update (else they are only counted).
   bool project_degenerate = true;
+  /// Vehicle motion constraint: a wheeled vehicle's velocity has no component along its up axis
+  /// (body frame), up to this std (suspension, bumps). 0: off.
+  double vertical_velocity_std = 0.0;
+  Eigen::Vector3d vertical_axis = Eigen::Vector3d::UnitZ();
 };
 
 struct UpdateResult {
