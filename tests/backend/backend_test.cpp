@@ -108,6 +108,24 @@ TEST(Backend, ClosesTheLoopAroundABlockAndRemovesTheDrift) {
   EXPECT_LT(after, 0.45) << "before " << before << ", loops " << loops;
   EXPECT_LT(after, before / 4.0);
 
+  // The loops hold: the optimised poses keep every accepted loop's relative pose as close to the
+  // truth as the registration measured it (the synthetic scans are exact, so the registration is
+  // good to ~1 cm / 0.05 deg). Loop weights looser than that let the odometry's accumulated
+  // drift pull the loop keyframes apart again.
+  double worst_loop_m = 0.0;
+  double worst_loop_deg = 0.0;
+  for (const LoopCheck& check : backend.loop_checks()) {
+    if (check.outcome != LoopOutcome::kAccepted) continue;
+    const Eigen::Isometry3d solved = optimized[check.candidate].inverse() * optimized[check.current];
+    const Eigen::Isometry3d true_relative = truth[check.candidate].inverse() * truth[check.current];
+    const Eigen::Isometry3d error = true_relative.inverse() * solved;
+    worst_loop_m = std::max(worst_loop_m, error.translation().norm());
+    worst_loop_deg = std::max(worst_loop_deg, Eigen::AngleAxisd(error.linear()).angle() / kDeg);
+  }
+  std::printf("worst loop error after the solve: %.3f m, %.3f deg\n", worst_loop_m, worst_loop_deg);
+  EXPECT_LT(worst_loop_m, 0.08);
+  EXPECT_LT(worst_loop_deg, 0.1);  // 0.30 deg with the former 0.1 m / 0.5 deg loop sigmas
+
   // The corrected trajectory at the keyframe times is the optimised keyframe poses, and the
   // newest keyframe's correction maps its odometry pose onto its optimised pose.
   const auto corrected = backend.corrected_trajectory(odometry_states);
