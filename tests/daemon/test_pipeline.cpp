@@ -83,8 +83,8 @@ TEST(Pipeline, StuckClientDoesNotAffectOdometry) {
   po.ordering = Ordering::Lockstep;
   po.pose_socket = (dir / "pose.sock").string();
   po.realtime_threads = false;
+  TrajectoryWriter tum((dir / "scan.tum").string());  // outlives the pipeline's sink threads
   Pipeline pipeline(config, po);
-  TrajectoryWriter tum((dir / "scan.tum").string());
   pipeline.add_sink([&](const PoseEvent& ev) {
     if (ev.message.type == pose::MessageType::ScanPose) tum.write(ev.message.time, ev.message.position, ev.message.orientation);
   });
