@@ -37,6 +37,23 @@ inline VoxelKey voxel_of(const Eigen::Vector3d& p, double inverse_size) {
   return {floor_to_int(p.x() * inverse_size), floor_to_int(p.y() * inverse_size), floor_to_int(p.z() * inverse_size)};
 }
 
+/// A set of voxel keys for one pass of thinning: open addressing in one array, so that the
+/// tens of thousands of keys a scan inserts cost no allocation each (std::unordered_set's nodes
+/// took a tenth of the front end's instructions).
+class VoxelSet {
+ public:
+  explicit VoxelSet(std::size_t expected);
+  /// True if the key was not in the set yet.
+  bool insert(const VoxelKey& key);
+
+ private:
+  void grow();
+
+  std::vector<VoxelKey> keys_;
+  std::vector<std::uint8_t> used_;
+  std::size_t size_ = 0;
+};
+
 /// Keeps the first point that falls in each voxel of the given size (a real measured point,
 /// not a centroid, so that surfaces are not smeared across corners).
 std::vector<Eigen::Vector3d> voxel_downsample(const std::vector<Eigen::Vector3d>& points, double voxel_size);
