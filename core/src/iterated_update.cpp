@@ -2,7 +2,9 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <optional>
 
 #include "liod/so3.hpp"
@@ -48,6 +50,30 @@ double huber_weight(double r, double k) {
 
 using Correspondences = std::vector<std::optional<LinearResidual>>;
 
+// Every point's correspondence at pose x. The points are taken voxel by voxel (sorted by their
+// map voxel), so that neighbouring queries share the map look-ups of one NeighbourSearch; each
+// answer still goes to its own point, so the sums over them keep their order.
+template <typename Correspond>
+void search_correspondences(const std::vector<Eigen::Vector3d>& points_body, const NavState& x, const LocalMap& map,
+                            const UpdateParams& params, Correspond correspond, Correspondences& cache) {
+  cache.resize(points_body.size());
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> by_voxel(points_body.size());
+  for (std::size_t i = 0; i < points_body.size(); ++i) {
+    const VoxelKey key = map.voxel_key(x.rotation * points_body[i] + x.position);
+    // 21 bits an axis: the order only groups the queries, wrapping far away costs nothing.
+    constexpr std::uint64_t kMask = (1U << 21) - 1;
+    const std::uint64_t packed = (static_cast<std::uint64_t>(static_cast<std::uint32_t>(key.x)) & kMask) << 42 |
+                                 (static_cast<std::uint64_t>(static_cast<std::uint32_t>(key.y)) & kMask) << 21 |
+                                 (static_cast<std::uint64_t>(static_cast<std::uint32_t>(key.z)) & kMask);
+    by_voxel[i] = {packed, static_cast<std::uint32_t>(i)};
+  }
+  std::sort(by_voxel.begin(), by_voxel.end());
+  LocalMap::NeighbourSearch neighbours(map);
+  for (const auto& [key, i] : by_voxel) {
+    cache[i] = correspond(neighbours, x.rotation * points_body[i] + x.position, params.correspondence);
+  }
+}
+
 // With `search` the map is queried afresh; otherwise the planes/lines found last time are kept
 // (re-linearised at the new pose), which is what makes later iterations cheap.
 template <typename Correspond>
@@ -55,11 +81,10 @@ void accumulate(const std::vector<Eigen::Vector3d>& points_body, const NavState&
                 const UpdateParams& params, Correspond correspond, bool search, Correspondences& cache,
                 Normal6& eq) {
   const double k = 2.0 * params.lidar_noise_m;
-  cache.resize(points_body.size());
+  if (search) search_correspondences(points_body, x, map, params, correspond, cache);
   for (std::size_t i = 0; i < points_body.size(); ++i) {
     const Eigen::Vector3d& pb = points_body[i];
     const Eigen::Vector3d q = x.rotation * pb + x.position;
-    if (search) cache[i] = correspond(map, q, params.correspondence);
     const auto& residual = cache[i];
     if (!residual || residual->normal.isZero()) continue;
     const double r = residual->evaluate(q);

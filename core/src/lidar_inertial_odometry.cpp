@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <unordered_set>
 
 #include "liod/gravity_alignment.hpp"
 #include "liod/hausdorff.hpp"
@@ -242,8 +241,7 @@ void LidarInertialOdometry::deskew_features(const Scan& scan, const ScanFeatures
   const double inverse_map_spacing = 1.0 / std::max(config_.odometry.map_min_point_spacing_m, 0.05);
   // Thin the candidates on their raw coordinates first, so that only the survivors pay for the
   // per-point pose (a voxel shifts by less than the motion blur, which is all that changes).
-  std::unordered_set<VoxelKey, VoxelKeyHash> occupied;
-  occupied.reserve(indices.planes.size());
+  VoxelSet occupied(indices.planes.size());
   std::vector<Eigen::Vector3d> planes;
   planes.reserve(indices.planes.size() / 2);
   auto deskewed = [&](std::uint32_t index) {
@@ -253,7 +251,7 @@ void LidarInertialOdometry::deskew_features(const Scan& scan, const ScanFeatures
   };
   for (auto i : indices.planes) {
     const LidarPoint& p = scan.points[i];
-    if (occupied.insert(voxel_of(Eigen::Vector3d(p.x, p.y, p.z), inverse_map_spacing)).second) {
+    if (occupied.insert(voxel_of(Eigen::Vector3d(p.x, p.y, p.z), inverse_map_spacing))) {
       planes.push_back(deskewed(i));
     }
   }
@@ -335,9 +333,10 @@ std::vector<LidarInertialOdometry::TimedPoint> LidarInertialOdometry::vertical_s
     levelled.push_back(state_.rotation * body);
   }
   std::vector<TimedPoint> out;
-  std::unordered_set<VoxelKey, VoxelKeyHash> occupied;
-  for (const auto i : vertical_structure(levelled, VerticalStructureParams{})) {
-    if (occupied.insert(voxel_of(levelled[i], 1.0 / kStructureVoxel_m)).second) out.push_back(candidates[i]);
+  const std::vector<std::size_t> structure = vertical_structure(levelled, VerticalStructureParams{});
+  VoxelSet occupied(structure.size());
+  for (const auto i : structure) {
+    if (occupied.insert(voxel_of(levelled[i], 1.0 / kStructureVoxel_m))) out.push_back(candidates[i]);
   }
   return out;
 }

@@ -9,14 +9,14 @@ LocalMap::LocalMap(double voxel_size, int max_points_per_voxel, double min_point
     : inverse_voxel_size_(1.0 / voxel_size),
       max_points_per_voxel_(static_cast<std::uint32_t>(std::clamp(max_points_per_voxel, 1, kMaxPointsPerVoxel))),
       min_spacing_squared_(static_cast<float>(min_point_spacing * min_point_spacing)),
-      slots_(1024, kEmpty) {}
+      slots_(1024) {}
 
 std::int32_t LocalMap::find_index(const VoxelKey& key) const {
   const std::size_t mask = slots_.size() - 1;
   for (std::size_t i = slot_of(key);; i = (i + 1) & mask) {
-    const std::int32_t v = slots_[i];
-    if (v == kEmpty) return kEmpty;
-    if (v >= 0 && voxels_[static_cast<std::size_t>(v)].key == key) return v;
+    const Slot& slot = slots_[i];
+    if (slot.voxel == kEmpty) return kEmpty;
+    if (slot.voxel >= 0 && slot.key == key) return slot.voxel;
   }
 }
 
@@ -35,9 +35,9 @@ LocalMap::Voxel& LocalMap::find_or_insert(const VoxelKey& key) {
   const std::size_t mask = slots_.size() - 1;
   std::size_t reusable = slots_.size();
   for (std::size_t i = slot_of(key);; i = (i + 1) & mask) {
-    const std::int32_t v = slots_[i];
+    const std::int32_t v = slots_[i].voxel;
     if (v == kDeleted && reusable == slots_.size()) reusable = i;
-    if (v >= 0 && voxels_[static_cast<std::size_t>(v)].key == key) return voxels_[static_cast<std::size_t>(v)];
+    if (v >= 0 && slots_[i].key == key) return voxels_[static_cast<std::size_t>(v)];
     if (v == kEmpty) {
       std::int32_t index;
       if (!free_voxels_.empty()) {
@@ -48,12 +48,11 @@ LocalMap::Voxel& LocalMap::find_or_insert(const VoxelKey& key) {
         voxels_.emplace_back();
       }
       Voxel& voxel = voxels_[static_cast<std::size_t>(index)];
-      voxel.key = key;
       voxel.count = 0;
       if (reusable != slots_.size()) {
-        slots_[reusable] = index;
+        slots_[reusable] = {key, index};
       } else {
-        slots_[i] = index;
+        slots_[i] = {key, index};
         ++used_slots_;
       }
       return voxel;
@@ -64,26 +63,26 @@ LocalMap::Voxel& LocalMap::find_or_insert(const VoxelKey& key) {
 void LocalMap::erase(const VoxelKey& key) {
   const std::size_t mask = slots_.size() - 1;
   for (std::size_t i = slot_of(key);; i = (i + 1) & mask) {
-    const std::int32_t v = slots_[i];
-    if (v == kEmpty) return;
-    if (v >= 0 && voxels_[static_cast<std::size_t>(v)].key == key) {
-      slots_[i] = kDeleted;  // a tombstone keeps later probes of other keys intact
-      free_voxels_.push_back(v);
+    Slot& slot = slots_[i];
+    if (slot.voxel == kEmpty) return;
+    if (slot.voxel >= 0 && slot.key == key) {
+      free_voxels_.push_back(slot.voxel);
+      slot.voxel = kDeleted;  // a tombstone keeps later probes of other keys intact
       return;
     }
   }
 }
 
 void LocalMap::rehash(std::size_t capacity) {
-  std::vector<std::int32_t> old = std::move(slots_);
-  slots_.assign(capacity, kEmpty);
+  std::vector<Slot> old = std::move(slots_);
+  slots_.assign(capacity, Slot{});
   used_slots_ = 0;
   const std::size_t mask = capacity - 1;
-  for (const std::int32_t v : old) {
-    if (v < 0) continue;
-    std::size_t i = slot_of(voxels_[static_cast<std::size_t>(v)].key);
-    while (slots_[i] != kEmpty) i = (i + 1) & mask;
-    slots_[i] = v;
+  for (const Slot& slot : old) {
+    if (slot.voxel < 0) continue;
+    std::size_t i = slot_of(slot.key);
+    while (slots_[i].voxel != kEmpty) i = (i + 1) & mask;
+    slots_[i] = slot;
     ++used_slots_;
   }
 }
@@ -96,10 +95,12 @@ void LocalMap::add(const std::vector<Eigen::Vector3d>& points, std::uint64_t key
     const Eigen::Vector3f pf = p.cast<float>();
     bool crowded = false;
     for (std::uint32_t i = 0; i < voxel.count && !crowded; ++i) {
-      crowded = (voxel.points[i] - pf).squaredNorm() < min_spacing_squared_;
+      crowded = (voxel.point(i) - pf).squaredNorm() < min_spacing_squared_;
     }
     if (crowded) continue;
-    voxel.points[voxel.count] = pf;
+    voxel.x[voxel.count] = pf.x();
+    voxel.y[voxel.count] = pf.y();
+    voxel.z[voxel.count] = pf.z();
     voxel.keyframes[voxel.count] = tag;
     ++voxel.count;
     ++point_count_;
@@ -116,7 +117,9 @@ void LocalMap::remove_keyframe(const std::vector<Eigen::Vector3d>& points, std::
     std::uint32_t kept = 0;
     for (std::uint32_t i = 0; i < voxel.count; ++i) {
       if (voxel.keyframes[i] == tag) continue;
-      voxel.points[kept] = voxel.points[i];
+      voxel.x[kept] = voxel.x[i];
+      voxel.y[kept] = voxel.y[i];
+      voxel.z[kept] = voxel.z[i];
       voxel.keyframes[kept] = voxel.keyframes[i];
       ++kept;
     }
@@ -128,54 +131,89 @@ void LocalMap::remove_keyframe(const std::vector<Eigen::Vector3d>& points, std::
 
 int LocalMap::nearest(const Eigen::Vector3d& query, int k, double max_distance,
                       std::array<Eigen::Vector3d, kMaxNeighbours>& out) const {
+  return NeighbourSearch(*this).nearest(query, k, max_distance, out);
+}
+
+int LocalMap::NeighbourSearch::nearest(const Eigen::Vector3d& query, int k, double max_distance,
+                                       std::array<Eigen::Vector3d, kMaxNeighbours>& out) {
   k = std::min(k, kMaxNeighbours);
   std::array<float, kMaxNeighbours> best_d2;
   std::array<Eigen::Vector3f, kMaxNeighbours> best;
   int found = 0;
   float worst = static_cast<float>(max_distance * max_distance);
-  const Eigen::Vector3f q = query.cast<float>();
+  const float qx = static_cast<float>(query.x());
+  const float qy = static_cast<float>(query.y());
+  const float qz = static_cast<float>(query.z());
   // Only the voxels that overlap the query's gate box can hold a neighbour: 1 to 8 of them for a
-  // gate up to half a voxel, at most 27 for a gate up to a whole one (the configuration's limit).
-  // The query's own voxel goes first; once k neighbours are found, a voxel whose box lies farther
-  // than the k-th of them is skipped before its hash lookup. Same neighbours, far fewer voxels
-  // visited with a wide gate in a dense map.
-  const VoxelKey own = voxel_of(query, inverse_voxel_size_);
-  const VoxelKey lo = voxel_of(query - Eigen::Vector3d::Constant(max_distance), inverse_voxel_size_);
-  const VoxelKey hi = voxel_of(query + Eigen::Vector3d::Constant(max_distance), inverse_voxel_size_);
-  const float voxel_size = static_cast<float>(1.0 / inverse_voxel_size_);
-  auto box_distance2 = [&](const VoxelKey& key) {
-    // From the query to the voxel's box, per axis 0 inside it.
-    const Eigen::Vector3f box_lo(static_cast<float>(key.x) * voxel_size, static_cast<float>(key.y) * voxel_size,
-                                 static_cast<float>(key.z) * voxel_size);
-    const Eigen::Vector3f below = (box_lo - q).cwiseMax(0.0F);
-    const Eigen::Vector3f above = (q - box_lo - Eigen::Vector3f::Constant(voxel_size)).cwiseMax(0.0F);
-    return (below + above).squaredNorm();
+  // gate up to half a voxel, at most 27 for a gate up to a whole one (the configuration's limit,
+  // hence the block of 27 around the query's voxel). The query's own voxel goes first; once k
+  // neighbours are found, a voxel whose box lies farther than the k-th of them is skipped before
+  // its hash lookup. Same neighbours, far fewer voxels visited with a wide gate in a dense map.
+  const double inverse_voxel_size = map_->inverse_voxel_size_;
+  const VoxelKey own = voxel_of(query, inverse_voxel_size);
+  const VoxelKey lo = voxel_of(query - Eigen::Vector3d::Constant(max_distance), inverse_voxel_size);
+  const VoxelKey hi = voxel_of(query + Eigen::Vector3d::Constant(max_distance), inverse_voxel_size);
+  if (!have_centre_ || !(own == centre_)) {
+    centre_ = own;
+    have_centre_ = true;
+    looked_up_ = 0;
+  }
+  const float voxel_size = static_cast<float>(1.0 / inverse_voxel_size);
+  auto squared = [](float a, float b, float c) { return a * a + (b * b + c * c); };  // as Eigen's squaredNorm
+  // From the query to a voxel's box, per axis 0 inside it: a sum of one term per axis, so the
+  // 3 x 3 terms of the block are computed once (squared), not for each of its 27 voxels.
+  auto axis_terms = [&](float q, std::int32_t centre) {
+    std::array<float, 3> terms;
+    for (int i = 0; i < 3; ++i) {
+      const float lo_edge = static_cast<float>(centre - 1 + i) * voxel_size;
+      const float gap = std::max(lo_edge - q, 0.0F) + std::max(q - lo_edge - voxel_size, 0.0F);
+      terms[static_cast<std::size_t>(i)] = gap * gap;
+    }
+    return terms;
   };
-  auto visit = [&](const VoxelKey& key) {
-    const Voxel* voxel = find(key);
+  const std::array<float, 3> box_x = axis_terms(qx, own.x);
+  const std::array<float, 3> box_y = axis_terms(qy, own.y);
+  const std::array<float, 3> box_z = axis_terms(qz, own.z);
+  auto visit = [&](int offset, const VoxelKey& key) {  // offset: 9 x + 3 y + z in the block, 0..26
+    if (!(looked_up_ >> offset & 1U)) {
+      voxels_[static_cast<std::size_t>(offset)] = map_->find(key);
+      looked_up_ |= 1U << offset;
+    }
+    const Voxel* voxel = voxels_[static_cast<std::size_t>(offset)];
     if (voxel == nullptr) return;
-    for (std::uint32_t j = 0; j < voxel->count; ++j) {
-      const float d2 = (voxel->points[j] - q).squaredNorm();
-      if (d2 >= worst) continue;
+    const std::uint32_t count = voxel->count;
+    std::array<float, kMaxPointsPerVoxel> d2;
+    for (std::uint32_t j = 0; j < count; ++j) {
+      d2[j] = squared(voxel->x[j] - qx, voxel->y[j] - qy, voxel->z[j] - qz);
+    }
+    for (std::uint32_t j = 0; j < count; ++j) {
+      if (d2[j] >= worst) continue;
       int pos = found < k ? found : k - 1;
-      while (pos > 0 && best_d2[static_cast<std::size_t>(pos - 1)] > d2) {
+      while (pos > 0 && best_d2[static_cast<std::size_t>(pos - 1)] > d2[j]) {
         best_d2[static_cast<std::size_t>(pos)] = best_d2[static_cast<std::size_t>(pos - 1)];
         best[static_cast<std::size_t>(pos)] = best[static_cast<std::size_t>(pos - 1)];
         --pos;
       }
-      best_d2[static_cast<std::size_t>(pos)] = d2;
-      best[static_cast<std::size_t>(pos)] = voxel->points[j];
+      best_d2[static_cast<std::size_t>(pos)] = d2[j];
+      best[static_cast<std::size_t>(pos)] = voxel->point(j);
       if (found < k) ++found;
       if (found == k) worst = best_d2[static_cast<std::size_t>(k - 1)];
     }
   };
-  visit(own);
-  for (int dx = lo.x; dx <= hi.x; ++dx) {
-    for (int dy = lo.y; dy <= hi.y; ++dy) {
-      for (int dz = lo.z; dz <= hi.z; ++dz) {
-        const VoxelKey key{dx, dy, dz};
-        if (key == own || box_distance2(key) >= worst) continue;
-        visit(key);
+  constexpr int kOwn = 13;  // the block's centre
+  visit(kOwn, own);
+  // A sum of non-negative terms is at least each of them (also rounded): once an axis's term
+  // reaches the k-th distance, its whole slab of the block is skipped.
+  for (int i = std::max(lo.x - own.x, -1) + 1; i <= std::min(hi.x - own.x, 1) + 1; ++i) {
+    const float sx = box_x[static_cast<std::size_t>(i)];
+    if (sx >= worst) continue;
+    for (int j = std::max(lo.y - own.y, -1) + 1; j <= std::min(hi.y - own.y, 1) + 1; ++j) {
+      const float sy = box_y[static_cast<std::size_t>(j)];
+      if (sy >= worst) continue;
+      for (int l = std::max(lo.z - own.z, -1) + 1; l <= std::min(hi.z - own.z, 1) + 1; ++l) {
+        const int offset = 9 * i + 3 * j + l;
+        if (offset == kOwn || sx + (sy + box_z[static_cast<std::size_t>(l)]) >= worst) continue;
+        visit(offset, {own.x + i - 1, own.y + j - 1, own.z + l - 1});
       }
     }
   }
@@ -186,10 +224,10 @@ int LocalMap::nearest(const Eigen::Vector3d& query, int k, double max_distance,
 std::vector<Eigen::Vector3d> LocalMap::points() const {
   std::vector<Eigen::Vector3d> all;
   all.reserve(point_count_);
-  for (const std::int32_t v : slots_) {
-    if (v < 0) continue;
-    const Voxel& voxel = voxels_[static_cast<std::size_t>(v)];
-    for (std::uint32_t i = 0; i < voxel.count; ++i) all.push_back(voxel.points[i].cast<double>());
+  for (const Slot& slot : slots_) {
+    if (slot.voxel < 0) continue;
+    const Voxel& voxel = voxels_[static_cast<std::size_t>(slot.voxel)];
+    for (std::uint32_t i = 0; i < voxel.count; ++i) all.push_back(voxel.point(i).cast<double>());
   }
   return all;
 }

@@ -31,7 +31,7 @@ struct Neighbourhood {
 };
 
 // The query's map neighbours and their principal axes, if it has enough of them.
-std::optional<Neighbourhood> neighbourhood(const LocalMap& map, const Eigen::Vector3d& query,
+std::optional<Neighbourhood> neighbourhood(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
                                            const CorrespondenceParams& params) {
   Neighbourhood nb;
   nb.count = map.nearest(query, params.neighbours, params.max_distance_m, nb.points);
@@ -43,7 +43,7 @@ std::optional<Neighbourhood> neighbourhood(const LocalMap& map, const Eigen::Vec
 
 }  // namespace
 
-std::optional<LinearResidual> plane_correspondence(const LocalMap& map, const Eigen::Vector3d& query,
+std::optional<LinearResidual> plane_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
                                                    const CorrespondenceParams& params) {
   const auto nb = neighbourhood(map, query, params);
   if (!nb) return std::nullopt;
@@ -63,7 +63,7 @@ std::optional<LinearResidual> plane_correspondence(const LocalMap& map, const Ei
   return LinearResidual{normal, offset};
 }
 
-std::optional<LinearResidual> line_correspondence(const LocalMap& map, const Eigen::Vector3d& query,
+std::optional<LinearResidual> line_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
                                                   const CorrespondenceParams& params) {
   const auto nb = neighbourhood(map, query, params);
   if (!nb) return std::nullopt;

@@ -15,6 +15,8 @@
 namespace liod {
 
 class LocalMap {
+  struct Voxel;
+
  public:
   static constexpr int kMaxNeighbours = 8;
   static constexpr int kMaxPointsPerVoxel = 32;
@@ -33,17 +35,47 @@ class LocalMap {
   int nearest(const Eigen::Vector3d& query, int k, double max_distance,
               std::array<Eigen::Vector3d, kMaxNeighbours>& out) const;
 
+  /// The voxel a point falls in: queries sorted by it share their look-ups in a NeighbourSearch.
+  VoxelKey voxel_key(const Eigen::Vector3d& p) const { return voxel_of(p, inverse_voxel_size_); }
+
+  /// Answers nearest() for a run of queries, keeping the voxels looked up around the last query's
+  /// voxel: a scan's queries, taken voxel by voxel, skip most of their 27 hash look-ups and find
+  /// the voxels' points still in cache. Same answers as LocalMap::nearest. Valid while the map
+  /// is unchanged.
+  class NeighbourSearch {
+   public:
+    explicit NeighbourSearch(const LocalMap& map) : map_(&map) {}
+    int nearest(const Eigen::Vector3d& query, int k, double max_distance,
+                std::array<Eigen::Vector3d, kMaxNeighbours>& out);
+
+   private:
+    const LocalMap* map_;
+    VoxelKey centre_;
+    bool have_centre_ = false;
+    std::uint32_t looked_up_ = 0;  // bit i: voxels_[i] holds the look-up of block offset i
+    std::array<const Voxel*, 27> voxels_{};
+  };
+
   std::size_t size() const { return point_count_; }
   bool empty() const { return point_count_ == 0; }
   /// Every point in the map (for saving and visualisation).
   std::vector<Eigen::Vector3d> points() const;
 
  private:
+  // Coordinates apart (structure of arrays), so that the distances to a voxel's points are
+  // computed several at a time.
   struct Voxel {
-    VoxelKey key;
+    std::array<float, kMaxPointsPerVoxel> x{};
+    std::array<float, kMaxPointsPerVoxel> y{};
+    std::array<float, kMaxPointsPerVoxel> z{};
+    std::array<std::uint32_t, kMaxPointsPerVoxel> keyframes{};
     std::uint32_t count = 0;
-    std::array<Eigen::Vector3f, kMaxPointsPerVoxel> points;
-    std::array<std::uint32_t, kMaxPointsPerVoxel> keyframes;
+    Eigen::Vector3f point(std::uint32_t i) const { return {x[i], y[i], z[i]}; }
+  };
+  // The key sits in the slot, so that probing reads the slot array only, not the voxels.
+  struct Slot {
+    VoxelKey key;
+    std::int32_t voxel = kEmpty;  // index into voxels_, or kEmpty / kDeleted
   };
   static constexpr std::int32_t kEmpty = -1;
   static constexpr std::int32_t kDeleted = -2;
@@ -59,7 +91,7 @@ class LocalMap {
   std::uint32_t max_points_per_voxel_;
   float min_spacing_squared_;
   std::size_t point_count_ = 0;
-  std::vector<std::int32_t> slots_;  // index into voxels_, or kEmpty / kDeleted
+  std::vector<Slot> slots_;
   std::vector<Voxel> voxels_;
   std::vector<std::int32_t> free_voxels_;
   std::size_t used_slots_ = 0;  // live + deleted, for the load factor

@@ -24,9 +24,9 @@ struct CorrespondenceParams {
   double min_line_ratio = 3.0;         // largest / second eigenvalue for a line
 };
 
-std::optional<LinearResidual> plane_correspondence(const LocalMap& map, const Eigen::Vector3d& query,
+std::optional<LinearResidual> plane_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
                                                    const CorrespondenceParams& params);
-std::optional<LinearResidual> line_correspondence(const LocalMap& map, const Eigen::Vector3d& query,
+std::optional<LinearResidual> line_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
                                                   const CorrespondenceParams& params);
 
 }  // namespace liod

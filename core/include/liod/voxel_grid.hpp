@@ -25,11 +25,34 @@ struct VoxelKeyHash {
   }
 };
 
-inline VoxelKey voxel_of(const Eigen::Vector3d& p, double inverse_size) {
-  return {static_cast<std::int32_t>(std::floor(p.x() * inverse_size)),
-          static_cast<std::int32_t>(std::floor(p.y() * inverse_size)),
-          static_cast<std::int32_t>(std::floor(p.z() * inverse_size))};
+/// floor() to an integer: truncation, minus one for a negative non-integer. Equal to std::floor
+/// in the int32 range, and a third of its instructions on x86-64's baseline (no rounding
+/// instruction there: GCC emulates floor on doubles); voxel keys are taken millions of times a scan.
+inline std::int32_t floor_to_int(double v) {
+  const auto truncated = static_cast<std::int32_t>(v);
+  return truncated - static_cast<std::int32_t>(v < static_cast<double>(truncated));
 }
+
+inline VoxelKey voxel_of(const Eigen::Vector3d& p, double inverse_size) {
+  return {floor_to_int(p.x() * inverse_size), floor_to_int(p.y() * inverse_size), floor_to_int(p.z() * inverse_size)};
+}
+
+/// A set of voxel keys for one pass of thinning: open addressing in one array, so that the
+/// tens of thousands of keys a scan inserts cost no allocation each (std::unordered_set's nodes
+/// took a tenth of the front end's instructions).
+class VoxelSet {
+ public:
+  explicit VoxelSet(std::size_t expected);
+  /// True if the key was not in the set yet.
+  bool insert(const VoxelKey& key);
+
+ private:
+  void grow();
+
+  std::vector<VoxelKey> keys_;
+  std::vector<std::uint8_t> used_;
+  std::size_t size_ = 0;
+};
 
 /// Keeps the first point that falls in each voxel of the given size (a real measured point,
 /// not a centroid, so that surfaces are not smeared across corners).

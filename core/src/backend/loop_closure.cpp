@@ -336,9 +336,10 @@ LoopCheck check_loop(KeyframeStore& keyframes, const std::vector<Eigen::Isometry
   int inliers = 0;
   double squared = 0.0;
   int matched = 0;
+  LocalMap::NeighbourSearch plane_search(plane_map);
   for (const auto& p : planes) {
     const Eigen::Vector3d q = registered * p;
-    const auto plane = plane_correspondence(plane_map, q, params.correspondence);
+    const auto plane = plane_correspondence(plane_search, q, params.correspondence);
     if (!plane) continue;
     const double r = plane->evaluate(q);
     squared += r * r;
