@@ -36,7 +36,7 @@ struct ImuConfig {
   double gyro_noise_density = 5.0e-4;   // rad/s/sqrt(Hz)
   double accel_noise_density = 5.0e-3;  // m/s^2/sqrt(Hz)
   double gyro_bias_random_walk = 5.0e-5;   // rad/s^2/sqrt(Hz)
-  double accel_bias_random_walk = 1.0e-3;  // m/s^3/sqrt(Hz)
+  double accel_bias_random_walk = 1.0e-2;  // m/s^3/sqrt(Hz), inflated on purpose (config/liod.yaml)
   double gravity_m_s2 = 9.80665;
   double max_gap_s = 0.05;              // a longer gap marks the IMU as lost
 };
