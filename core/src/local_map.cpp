@@ -138,7 +138,10 @@ int LocalMap::NeighbourSearch::nearest(const Eigen::Vector3d& query, int k, doub
                                        std::array<Eigen::Vector3d, kMaxNeighbours>& out) {
   k = std::min(k, kMaxNeighbours);
   std::array<float, kMaxNeighbours> best_d2;
-  std::array<Eigen::Vector3f, kMaxNeighbours> best;
+  // Which point each of them is: its voxel's block offset (voxels_) times 32 plus its index
+  // there, so that the insertion below shifts a small integer, not the point.
+  static_assert(kMaxPointsPerVoxel <= 32, "a point's index takes 5 bits of its handle");
+  std::array<std::uint16_t, kMaxNeighbours> best;
   int found = 0;
   float worst = static_cast<float>(max_distance * max_distance);
   const float qx = static_cast<float>(query.x());
@@ -195,7 +198,7 @@ int LocalMap::NeighbourSearch::nearest(const Eigen::Vector3d& query, int k, doub
         --pos;
       }
       best_d2[static_cast<std::size_t>(pos)] = d2[j];
-      best[static_cast<std::size_t>(pos)] = voxel->point(j);
+      best[static_cast<std::size_t>(pos)] = static_cast<std::uint16_t>(offset << 5 | static_cast<int>(j));
       if (found < k) ++found;
       if (found == k) worst = best_d2[static_cast<std::size_t>(k - 1)];
     }
@@ -217,7 +220,10 @@ int LocalMap::NeighbourSearch::nearest(const Eigen::Vector3d& query, int k, doub
       }
     }
   }
-  for (int i = 0; i < found; ++i) out[static_cast<std::size_t>(i)] = best[static_cast<std::size_t>(i)].cast<double>();
+  for (int i = 0; i < found; ++i) {
+    const std::uint16_t handle = best[static_cast<std::size_t>(i)];
+    out[static_cast<std::size_t>(i)] = voxels_[handle >> 5U]->point(handle & 31U).cast<double>();
+  }
   return found;
 }
 
