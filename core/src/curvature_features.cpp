@@ -5,6 +5,29 @@
 #include <limits>
 
 namespace liod {
+namespace {
+
+// sum over m in [k - kHalf, k + kHalf], m != k, of (X_k - X_m), added in that order. The half
+// width is a template argument so that the loops unroll (no per-step loop or m == k test).
+template <int kHalf>
+Eigen::Vector3f summed_differences(const float* x, const float* y, const float* z, int k) {
+  float sx = 0.0F;
+  float sy = 0.0F;
+  float sz = 0.0F;
+  for (int m = k - kHalf; m < k; ++m) {
+    sx += x[k] - x[m];
+    sy += y[k] - y[m];
+    sz += z[k] - z[m];
+  }
+  for (int m = k + 1; m <= k + kHalf; ++m) {
+    sx += x[k] - x[m];
+    sy += y[k] - y[m];
+    sz += z[k] - z[m];
+  }
+  return {sx, sy, sz};
+}
+
+}  // namespace
 
 int curvature_neighbourhood_size(double range_m, CurvatureNeighbourhood mode) {
   if (mode == CurvatureNeighbourhood::kFixed) return 10;
@@ -29,10 +52,29 @@ void FeatureExtractor::extract(const Scan& scan, ScanFeatures& out) {
     const float r = std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
     range_[i] = r;
     if (!std::isfinite(r) || r < min_range || r > max_range || p.ring >= rings_.size()) continue;
-    if (params_.self_crop && params_.self_crop->contains(Eigen::Vector3f(p.x, p.y, p.z))) continue;
+    if (params_.self_crop && r <= self_crop_reach_ && params_.self_crop->contains(Eigen::Vector3f(p.x, p.y, p.z))) {
+      continue;
+    }
     rings_[p.ring].push_back(i);
   }
   for (const auto& ring : rings_) process_ring(scan, ring, out);
+}
+
+void FeatureExtractor::gather_ring(const Scan& scan, const std::vector<std::uint32_t>& ring) {
+  const std::size_t n = ring.size();
+  ring_x_.resize(n);
+  ring_y_.resize(n);
+  ring_z_.resize(n);
+  ring_time_.resize(n);
+  ring_range_.resize(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const LidarPoint& p = scan.points[ring[k]];
+    ring_x_[k] = p.x;
+    ring_y_[k] = p.y;
+    ring_z_[k] = p.z;
+    ring_time_[k] = p.time;
+    ring_range_[k] = range_[ring[k]];
+  }
 }
 
 void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uint32_t>& ring, ScanFeatures& out) {
@@ -40,21 +82,29 @@ void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uin
   constexpr int kMaxHalf = 5;
   if (n < 2 * kMaxHalf + 1) return;
   excluded_.assign(static_cast<std::size_t>(n), 0);
-  const auto& pts = scan.points;
-  auto range_at = [&](int k) { return range_[ring[static_cast<std::size_t>(k)]]; };
+  gather_ring(scan, ring);
+  const float* x = ring_x_.data();
+  const float* y = ring_y_.data();
+  const float* z = ring_z_.data();
+  const float* range = ring_range_.data();
 
   // Missing returns leave gaps in time; a window across a gap mixes distant surfaces.
   // Consecutive firings of one beam are 55.6 us apart at 10 Hz; allow a few missing.
+  // gaps_before_[k]: how many of the steps k' -> k' + 1 with k' < k are gaps, so that a window's
+  // test is one difference instead of a loop over its steps.
   constexpr float kMaxFiringGap = 4.0F * 55.56e-6F;
-  auto gap_after = [&](int k) {
-    return pts[ring[static_cast<std::size_t>(k) + 1]].time - pts[ring[static_cast<std::size_t>(k)]].time > kMaxFiringGap;
-  };
+  gaps_before_.resize(static_cast<std::size_t>(n));
+  gaps_before_[0] = 0;
+  for (int k = 0; k + 1 < n; ++k) {
+    const bool gap = ring_time_[static_cast<std::size_t>(k) + 1] - ring_time_[static_cast<std::size_t>(k)] > kMaxFiringGap;
+    gaps_before_[static_cast<std::size_t>(k) + 1] = gaps_before_[static_cast<std::size_t>(k)] + (gap ? 1 : 0);
+  }
 
   // Occlusion: at a range jump, the far side's points are hidden behind the near object and
   // their apparent edge moves with the viewpoint, so they are unreliable features.
   for (int k = 0; k + 1 < n; ++k) {
-    const float r0 = range_at(k);
-    const float r1 = range_at(k + 1);
+    const float r0 = range[k];
+    const float r1 = range[k + 1];
     const float jump = static_cast<float>(params_.occlusion_jump_m) * std::max(1.0F, std::min(r0, r1) / 10.0F);
     if (std::abs(r0 - r1) > jump) {
       if (r0 > r1) {
@@ -66,8 +116,8 @@ void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uin
   }
   // Beams nearly parallel to the surface: both neighbours' ranges differ a lot from this one.
   for (int k = 1; k + 1 < n; ++k) {
-    const float r = range_at(k);
-    if (std::abs(range_at(k - 1) - r) > 0.02F * r && std::abs(range_at(k + 1) - r) > 0.02F * r) {
+    const float r = range[k];
+    if (std::abs(range[k - 1] - r) > 0.02F * r && std::abs(range[k + 1] - r) > 0.02F * r) {
       excluded_[static_cast<std::size_t>(k)] = 1;
     }
   }
@@ -75,23 +125,18 @@ void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uin
   auto& ring_curvature = ring_curvature_;
   ring_curvature.assign(static_cast<std::size_t>(n), std::numeric_limits<float>::quiet_NaN());
   for (int k = kMaxHalf; k < n - kMaxHalf; ++k) {
-    const auto& pi = pts[ring[static_cast<std::size_t>(k)]];
-    const float r = range_at(k);
+    const float r = range[k];
     const int half = curvature_neighbourhood_size(r, params_.neighbourhood) / 2;
-    bool broken = false;
-    for (int m = k - half; m < k + half && !broken; ++m) broken = gap_after(m);
-    if (broken) continue;
-    float sx = 0.0F;
-    float sy = 0.0F;
-    float sz = 0.0F;
-    for (int m = k - half; m <= k + half; ++m) {
-      if (m == k) continue;
-      const auto& pj = pts[ring[static_cast<std::size_t>(m)]];
-      sx += pi.x - pj.x;
-      sy += pi.y - pj.y;
-      sz += pi.z - pj.z;
+    if (gaps_before_[static_cast<std::size_t>(k + half)] != gaps_before_[static_cast<std::size_t>(k - half)]) continue;
+    Eigen::Vector3f sum;
+    switch (half) {
+      case 5: sum = summed_differences<5>(x, y, z, k); break;
+      case 4: sum = summed_differences<4>(x, y, z, k); break;
+      case 3: sum = summed_differences<3>(x, y, z, k); break;
+      default: sum = summed_differences<2>(x, y, z, k); break;
     }
-    const float c = std::sqrt(sx * sx + sy * sy + sz * sz) / (static_cast<float>(2 * half) * r);
+    const float c = std::sqrt(sum.x() * sum.x() + sum.y() * sum.y() + sum.z() * sum.z()) /
+                    (static_cast<float>(2 * half) * r);
     ring_curvature[static_cast<std::size_t>(k)] = c;
     curvature_[ring[static_cast<std::size_t>(k)]] = c;
   }

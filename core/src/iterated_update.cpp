@@ -50,16 +50,23 @@ double huber_weight(double r, double k) {
 
 using Correspondences = std::vector<std::optional<LinearResidual>>;
 
-// Every point's correspondence at pose x. The points are taken voxel by voxel (sorted by their
-// map voxel), so that neighbouring queries share the map look-ups of one NeighbourSearch; each
-// answer still goes to its own point, so the sums over them keep their order.
+// The points in the world at pose x, into `world` (reused from iteration to iteration).
+void to_world(const std::vector<Eigen::Vector3d>& points_body, const NavState& x, std::vector<Eigen::Vector3d>& world) {
+  world.resize(points_body.size());
+  for (std::size_t i = 0; i < points_body.size(); ++i) world[i] = x.rotation * points_body[i] + x.position;
+}
+
+// Every point's correspondence (points_world: at the current pose). The points are taken voxel
+// by voxel (sorted by their map voxel), so that neighbouring queries share the map look-ups of
+// one NeighbourSearch; each answer still goes to its own point, so the sums over them keep
+// their order.
 template <typename Correspond>
-void search_correspondences(const std::vector<Eigen::Vector3d>& points_body, const NavState& x, const LocalMap& map,
+void search_correspondences(const std::vector<Eigen::Vector3d>& points_world, const LocalMap& map,
                             const UpdateParams& params, Correspond correspond, Correspondences& cache) {
-  cache.resize(points_body.size());
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> by_voxel(points_body.size());
-  for (std::size_t i = 0; i < points_body.size(); ++i) {
-    const VoxelKey key = map.voxel_key(x.rotation * points_body[i] + x.position);
+  cache.resize(points_world.size());
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> by_voxel(points_world.size());
+  for (std::size_t i = 0; i < points_world.size(); ++i) {
+    const VoxelKey key = map.voxel_key(points_world[i]);
     // 21 bits an axis: the order only groups the queries, wrapping far away costs nothing.
     constexpr std::uint64_t kMask = (1U << 21) - 1;
     const std::uint64_t packed = (static_cast<std::uint64_t>(static_cast<std::uint32_t>(key.x)) & kMask) << 42 |
@@ -70,21 +77,23 @@ void search_correspondences(const std::vector<Eigen::Vector3d>& points_body, con
   std::sort(by_voxel.begin(), by_voxel.end());
   LocalMap::NeighbourSearch neighbours(map);
   for (const auto& [key, i] : by_voxel) {
-    cache[i] = correspond(neighbours, x.rotation * points_body[i] + x.position, params.correspondence);
+    cache[i] = correspond(neighbours, points_world[i], params.correspondence);
   }
 }
 
 // With `search` the map is queried afresh; otherwise the planes/lines found last time are kept
 // (re-linearised at the new pose), which is what makes later iterations cheap.
+// points_world: points_body at pose x (to_world), a buffer shared with the search.
 template <typename Correspond>
-void accumulate(const std::vector<Eigen::Vector3d>& points_body, const NavState& x, const LocalMap& map,
-                const UpdateParams& params, Correspond correspond, bool search, Correspondences& cache,
-                Normal6& eq) {
+void accumulate(const std::vector<Eigen::Vector3d>& points_body, const NavState& x,
+                std::vector<Eigen::Vector3d>& points_world, const LocalMap& map, const UpdateParams& params,
+                Correspond correspond, bool search, Correspondences& cache, Normal6& eq) {
   const double k = 2.0 * params.lidar_noise_m;
-  if (search) search_correspondences(points_body, x, map, params, correspond, cache);
+  to_world(points_body, x, points_world);
+  if (search) search_correspondences(points_world, map, params, correspond, cache);
   for (std::size_t i = 0; i < points_body.size(); ++i) {
     const Eigen::Vector3d& pb = points_body[i];
-    const Eigen::Vector3d q = x.rotation * pb + x.position;
+    const Eigen::Vector3d& q = points_world[i];
     const auto& residual = cache[i];
     if (!residual || residual->normal.isZero()) continue;
     const double r = residual->evaluate(q);
@@ -128,6 +137,8 @@ UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior
   StateCovariance information = prior_information;
   Correspondences plane_cache;
   Correspondences edge_cache;
+  std::vector<Eigen::Vector3d> planes_world;
+  std::vector<Eigen::Vector3d> edges_world;
   NavState searched_at = x;
   int degenerate_directions = 0;
   for (int iteration = 0; iteration < params.max_iterations; ++iteration) {
@@ -137,8 +148,10 @@ UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior
                         moved.segment<3>(3).norm() > params.research_translation_m;
     if (search) searched_at = x;
     eq = Normal6{};
-    accumulate(planes_body, x, plane_map, params, plane_correspondence, search, plane_cache, eq);
-    if (!edge_map.empty()) accumulate(edges_body, x, edge_map, params, line_correspondence, search, edge_cache, eq);
+    accumulate(planes_body, x, planes_world, plane_map, params, plane_correspondence, search, plane_cache, eq);
+    if (!edge_map.empty()) {
+      accumulate(edges_body, x, edges_world, edge_map, params, line_correspondence, search, edge_cache, eq);
+    }
     // Degeneracy (Zhang, Kaess, Singh, ICRA 2016): along directions the scene hardly constrains
     // (a tunnel's axis), the LiDAR's few, slightly biased normals would push the pose without
     // information to back it. Remove the LiDAR from those directions; the IMU prior holds them.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace liod {
 
@@ -137,8 +138,14 @@ int LocalMap::nearest(const Eigen::Vector3d& query, int k, double max_distance,
 int LocalMap::NeighbourSearch::nearest(const Eigen::Vector3d& query, int k, double max_distance,
                                        std::array<Eigen::Vector3d, kMaxNeighbours>& out) {
   k = std::min(k, kMaxNeighbours);
-  std::array<float, kMaxNeighbours> best_d2;
-  std::array<Eigen::Vector3f, kMaxNeighbours> best;
+  // best_d2[i + 1] is the i-th nearest's squared distance; best_d2[0], below any distance, ends
+  // the insertion's shifting without a bounds test.
+  std::array<float, kMaxNeighbours + 1> best_d2;
+  best_d2[0] = -std::numeric_limits<float>::infinity();
+  // Which point each of them is: its voxel's block offset (voxels_) times 32 plus its index
+  // there, so that the insertion below shifts a small integer, not the point.
+  static_assert(kMaxPointsPerVoxel <= 32, "a point's index takes 5 bits of its handle");
+  std::array<std::uint16_t, kMaxNeighbours> best;
   int found = 0;
   float worst = static_cast<float>(max_distance * max_distance);
   const float qx = static_cast<float>(query.x());
@@ -189,15 +196,15 @@ int LocalMap::NeighbourSearch::nearest(const Eigen::Vector3d& query, int k, doub
     for (std::uint32_t j = 0; j < count; ++j) {
       if (d2[j] >= worst) continue;
       int pos = found < k ? found : k - 1;
-      while (pos > 0 && best_d2[static_cast<std::size_t>(pos - 1)] > d2[j]) {
-        best_d2[static_cast<std::size_t>(pos)] = best_d2[static_cast<std::size_t>(pos - 1)];
+      while (best_d2[static_cast<std::size_t>(pos)] > d2[j]) {
+        best_d2[static_cast<std::size_t>(pos) + 1] = best_d2[static_cast<std::size_t>(pos)];
         best[static_cast<std::size_t>(pos)] = best[static_cast<std::size_t>(pos - 1)];
         --pos;
       }
-      best_d2[static_cast<std::size_t>(pos)] = d2[j];
-      best[static_cast<std::size_t>(pos)] = voxel->point(j);
+      best_d2[static_cast<std::size_t>(pos) + 1] = d2[j];
+      best[static_cast<std::size_t>(pos)] = static_cast<std::uint16_t>(offset << 5 | static_cast<int>(j));
       if (found < k) ++found;
-      if (found == k) worst = best_d2[static_cast<std::size_t>(k - 1)];
+      if (found == k) worst = best_d2[static_cast<std::size_t>(k)];
     }
   };
   constexpr int kOwn = 13;  // the block's centre
@@ -217,7 +224,10 @@ int LocalMap::NeighbourSearch::nearest(const Eigen::Vector3d& query, int k, doub
       }
     }
   }
-  for (int i = 0; i < found; ++i) out[static_cast<std::size_t>(i)] = best[static_cast<std::size_t>(i)].cast<double>();
+  for (int i = 0; i < found; ++i) {
+    const std::uint16_t handle = best[static_cast<std::size_t>(i)];
+    out[static_cast<std::size_t>(i)] = voxels_[handle >> 5U]->point(handle & 31U).cast<double>();
+  }
   return found;
 }
 

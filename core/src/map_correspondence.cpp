@@ -30,27 +30,27 @@ struct Neighbourhood {
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;  // eigenvalues ascending
 };
 
-// The query's map neighbours and their principal axes, if it has enough of them.
-std::optional<Neighbourhood> neighbourhood(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
-                                           const CorrespondenceParams& params) {
-  Neighbourhood nb;
+// The query's map neighbours and their principal axes into nb, if it has enough of them (filled
+// in place: the callers keep it on their stack rather than copy it out of an optional).
+bool find_neighbourhood(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query, const CorrespondenceParams& params,
+                        Neighbourhood& nb) {
   nb.count = map.nearest(query, params.neighbours, params.max_distance_m, nb.points);
-  if (nb.count < params.neighbours) return std::nullopt;
+  if (nb.count < params.neighbours) return false;
   nb.moments = moments(nb.points, nb.count);
   nb.eig.computeDirect(nb.moments.covariance);
-  return nb;
+  return true;
 }
 
 }  // namespace
 
 std::optional<LinearResidual> plane_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
                                                    const CorrespondenceParams& params) {
-  const auto nb = neighbourhood(map, query, params);
-  if (!nb) return std::nullopt;
-  const auto& eig = nb->eig;
-  const auto& nn = nb->points;
-  const int n = nb->count;
-  const Moments& m = nb->moments;
+  Neighbourhood nb;
+  if (!find_neighbourhood(map, query, params, nb)) return std::nullopt;
+  const auto& eig = nb.eig;
+  const auto& nn = nb.points;
+  const int n = nb.count;
+  const Moments& m = nb.moments;
   // Neighbours along one scan ring are nearly collinear: every plane through that line fits them,
   // so the normal would be arbitrary. Demand a real second dimension.
   const Eigen::Vector3d ev = eig.eigenvalues();
@@ -65,10 +65,10 @@ std::optional<LinearResidual> plane_correspondence(LocalMap::NeighbourSearch& ma
 
 std::optional<LinearResidual> line_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
                                                   const CorrespondenceParams& params) {
-  const auto nb = neighbourhood(map, query, params);
-  if (!nb) return std::nullopt;
-  const auto& eig = nb->eig;
-  const Moments& m = nb->moments;
+  Neighbourhood nb;
+  if (!find_neighbourhood(map, query, params, nb)) return std::nullopt;
+  const auto& eig = nb.eig;
+  const Moments& m = nb.moments;
   const Eigen::Vector3d ev = eig.eigenvalues();
   if (!(ev(2) > params.min_line_ratio * ev(1))) return std::nullopt;
   const Eigen::Vector3d direction = eig.eigenvectors().col(2).normalized();

@@ -4,6 +4,7 @@
 // ranges <= 10 / <= 20 / <= 30 / > 30 m (DESIGN.md, "Distance-adaptive curvature").
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -22,6 +23,17 @@ struct CropBox {
   bool contains(const Eigen::Vector3f& sensor_point) const {
     const Eigen::Vector3f p = sensor_to_body * sensor_point;
     return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
+  }
+  /// No point farther than this from the sensor lies in the box (its farthest corner, with a
+  /// margin over float rounding): most returns skip the transform of contains() on their range.
+  float reach() const {
+    float farthest = 0.0F;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Eigen::Vector3f c((corner & 1) ? max.x() : min.x(), (corner & 2) ? max.y() : min.y(),
+                              (corner & 4) ? max.z() : min.z());
+      farthest = std::max(farthest, (c - sensor_to_body.translation()).norm());
+    }
+    return farthest * 1.001F + 1e-3F;
   }
 };
 
@@ -48,19 +60,26 @@ struct ScanFeatures {
 /// Reuses its buffers from scan to scan, so steady-state extraction does not allocate.
 class FeatureExtractor {
  public:
-  explicit FeatureExtractor(const FeatureParams& params) : params_(params) {}
+  explicit FeatureExtractor(const FeatureParams& params)
+      : params_(params), self_crop_reach_(params.self_crop ? params.self_crop->reach() : 0.0F) {}
   void extract(const Scan& scan, ScanFeatures& out);
   /// Curvature of every point of the last scan (NaN where undefined), for diagnostics and tests.
   const std::vector<float>& curvature() const { return curvature_; }
 
  private:
   void process_ring(const Scan& scan, const std::vector<std::uint32_t>& ring, ScanFeatures& out);
+  /// Copies the ring's coordinates, times and ranges into ring_*_ in ring order: the windows
+  /// below then read consecutive floats instead of chasing indices into the scan.
+  void gather_ring(const Scan& scan, const std::vector<std::uint32_t>& ring);
 
   FeatureParams params_;
+  float self_crop_reach_;  // CropBox::reach of params_.self_crop
   std::vector<std::vector<std::uint32_t>> rings_;
   std::vector<float> curvature_;
   std::vector<float> range_;
   std::vector<float> ring_curvature_;
+  std::vector<float> ring_x_, ring_y_, ring_z_, ring_time_, ring_range_;  // per ring position
+  std::vector<int> gaps_before_;                                          // per ring position
   std::vector<std::uint8_t> excluded_;  // per ring position
   std::vector<std::uint32_t> order_;
 };
