@@ -232,6 +232,8 @@ Schema declare_schema(Config& c) {
            {{"adaptive", CurvatureMode::kAdaptive}, {"fixed", CurvatureMode::kFixed}});
   s.choice("odometry.keyframe_gating", &o.keyframe_gating,
            {{"hausdorff", KeyframeGating::kHausdorff}, {"distance_angle", KeyframeGating::kDistanceAngle}});
+  s.choice("odometry.edge_residual", &o.edge_residual,
+           {{"along_ray", EdgeResidual::kAlongRay}, {"point_to_line", EdgeResidual::kPointToLine}});
   s.real("odometry.min_range_m", &o.min_range_m, 0.0, 50.0);
   s.real("odometry.max_range_m", &o.max_range_m, 5.0, 500.0);
   s.vector3("odometry.crop_box_min_m", &o.crop_box_min_m, 50.0);
@@ -255,6 +257,7 @@ Schema declare_schema(Config& c) {
   s.integer("odometry.correspondence_neighbours", &o.correspondence_neighbours, 3, 8);
   s.real("odometry.correspondence_gate_m", &o.correspondence_gate_m, 0.05, 20.0);
   s.real("odometry.plane_thickness_m", &o.plane_thickness_m, 1e-4, 10.0);
+  s.boolean("odometry.fit_uncertainty", &o.fit_uncertainty);
   s.real("odometry.keyframe_distance_m", &o.keyframe_distance_m, 0.0, 100.0);
   s.real("odometry.keyframe_angle_deg", &o.keyframe_angle_deg, 0.0, 180.0);
   s.real("odometry.hausdorff_threshold_m", &o.hausdorff_threshold_m, 0.0, 100.0);

@@ -101,7 +101,7 @@ void accumulate(const std::vector<Eigen::Vector3d>& points_body, const NavState&
     Eigen::Matrix<double, 1, 6> h;
     h.head<3>() = -residual->normal.transpose() * x.rotation * so3::hat(pb);
     h.tail<3>() = residual->normal.transpose();
-    const double w = huber_weight(r, k);
+    const double w = huber_weight(r / std::sqrt(residual->variance_scale), k) / residual->variance_scale;
     eq.hessian.noalias() += w * h.transpose() * h;
     eq.gradient.noalias() += w * h.transpose() * r;
     eq.squared_error += r * r;
@@ -150,7 +150,12 @@ UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior
     eq = Normal6{};
     accumulate(planes_body, x, planes_world, plane_map, params, plane_correspondence, search, plane_cache, eq);
     if (!edge_map.empty()) {
-      accumulate(edges_body, x, edges_world, edge_map, params, line_correspondence, search, edge_cache, eq);
+      std::optional<Eigen::Vector3d> sensor;
+      if (params.edge_viewpoint_body) sensor = x.rotation * *params.edge_viewpoint_body + x.position;
+      auto line = [&](LocalMap::NeighbourSearch& ns, const Eigen::Vector3d& q, const CorrespondenceParams& p) {
+        return line_correspondence(ns, q, p, sensor ? &*sensor : nullptr);
+      };
+      accumulate(edges_body, x, edges_world, edge_map, params, line, search, edge_cache, eq);
     }
     // Degeneracy (Zhang, Kaess, Singh, ICRA 2016): along directions the scene hardly constrains
     // (a tunnel's axis), the LiDAR's few, slightly biased normals would push the pose without

@@ -157,6 +157,10 @@ LidarInertialOdometry::LidarInertialOdometry(const Config& config)
   update_params_.correspondence.neighbours = config.odometry.correspondence_neighbours;
   update_params_.correspondence.max_distance_m = config.odometry.correspondence_gate_m;
   update_params_.correspondence.max_plane_thickness_m = config.odometry.plane_thickness_m;
+  update_params_.correspondence.fit_uncertainty = config.odometry.fit_uncertainty;
+  if (config.odometry.edge_residual == EdgeResidual::kAlongRay) {
+    update_params_.edge_viewpoint_body = config.extrinsics.lidar_to_imu_translation;
+  }
   update_params_.degeneracy_eigenvalue = config.odometry.degeneracy_eigenvalue;
   update_params_.project_degenerate = config.odometry.degeneracy_projection;
   update_params_.vertical_velocity_std = config.odometry.vertical_velocity_std_mps;

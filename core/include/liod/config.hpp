@@ -15,6 +15,9 @@ enum class LidarModel { kHelios5515, kHelios16P };
 enum class DeskewMode { kImu, kConstantVelocity, kNone };
 enum class CurvatureMode { kAdaptive, kFixed };
 enum class KeyframeGating { kHausdorff, kDistanceAngle };
+/// How an edge point's distance to its map line is measured: along the LiDAR ray (its range, which
+/// the silhouette of a post or a corner does not shift with the viewpoint) or the shortest way (LOAM).
+enum class EdgeResidual { kAlongRay, kPointToLine };
 
 struct LogConfig {
   std::string level = "info";  // trace, debug, info, warn, error, off
@@ -83,6 +86,8 @@ struct OdometryConfig {
   int correspondence_neighbours = 8;     // map neighbours of a plane / line correspondence (front end)
   double correspondence_gate_m = 1.0;    // front end: farther map neighbours are not used
   double plane_thickness_m = 0.03;       // every neighbour within this of its fitted plane
+  bool fit_uncertainty = true;           // a residual's variance includes its fitted plane's / line's uncertainty
+  EdgeResidual edge_residual = EdgeResidual::kAlongRay;
   double keyframe_distance_m = 1.0;
   double keyframe_angle_deg = 10.0;
   double hausdorff_threshold_m = 0.6; // h1

@@ -6,6 +6,7 @@
 // and biases.
 
 #include <Eigen/Core>
+#include <optional>
 #include <vector>
 
 #include "liod/imu_preintegration.hpp"
@@ -31,6 +32,9 @@ struct UpdateParams {
   /// (body frame), up to this std (suspension, bumps). 0: off.
   double vertical_velocity_std = 0.0;
   Eigen::Vector3d vertical_axis = Eigen::Vector3d::UnitZ();
+  /// The LiDAR's origin in the body frame: edge residuals are then measured along the ray from it
+  /// (line_correspondence's viewpoint). None: point-to-line distance.
+  std::optional<Eigen::Vector3d> edge_viewpoint_body;
 };
 
 struct UpdateResult {

@@ -13,6 +13,9 @@ namespace liod {
 struct LinearResidual {
   Eigen::Vector3d normal;
   double offset = 0.0;
+  /// The residual's variance in units of the point noise: the query's own noise plus the fitted
+  /// plane's (line's) uncertainty where the query lies (see map_correspondence.cpp).
+  double variance_scale = 1.0;
   double evaluate(const Eigen::Vector3d& q) const { return normal.dot(q) + offset; }
 };
 
@@ -22,11 +25,15 @@ struct CorrespondenceParams {
   double max_plane_thickness_m = 0.1;  // every neighbour within this of the fitted plane
   double min_plane_spread_ratio = 0.2; // second / largest spread (std) of the neighbours, against collinear ones
   double min_line_ratio = 3.0;         // largest / second eigenvalue for a line
+  bool fit_uncertainty = true;         // false: a residual's variance is the point noise alone
 };
 
 std::optional<LinearResidual> plane_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
                                                    const CorrespondenceParams& params);
+/// With a viewpoint (the LiDAR's origin, world frame) the distance to the line is measured along
+/// the ray from it, else the shortest way (LOAM).
 std::optional<LinearResidual> line_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
-                                                  const CorrespondenceParams& params);
+                                                  const CorrespondenceParams& params,
+                                                  const Eigen::Vector3d* viewpoint = nullptr);
 
 }  // namespace liod

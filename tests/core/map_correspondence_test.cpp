@@ -1,0 +1,104 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "liod/map_correspondence.hpp"
+
+namespace {
+
+// A query beyond the end of a narrow strip of noisy map points (as ahead of the rings a keyframe
+// left on the ground): the fitted plane's tilt, not the query's own noise, dominates the residual.
+struct StripTrial {
+  double residual;
+  double variance_scale;
+};
+
+StripTrial strip_trial(std::mt19937& rng, double sigma, double query_x, bool fit_uncertainty) {
+  std::normal_distribution<double> noise(0.0, sigma);
+  liod::LocalMap map(1.0, liod::LocalMap::kMaxPointsPerVoxel, 0.0);
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 4; ++i) {
+    for (int row = 0; row < 2; ++row) points.emplace_back(0.1 + 0.15 * i, 0.1 + 0.25 * row, 0.5 + noise(rng));
+  }
+  map.add(points, 0);
+  liod::LocalMap::NeighbourSearch search(map);
+  liod::CorrespondenceParams params;
+  params.neighbours = 8;
+  params.max_distance_m = 1.0;
+  params.max_plane_thickness_m = 1.0;  // the trial measures the fit, not the thickness test
+  params.fit_uncertainty = fit_uncertainty;
+  const Eigen::Vector3d query(query_x, 0.22, 0.5);  // on the true plane z = 0.5
+  const auto plane = liod::plane_correspondence(search, query, params);
+  if (!plane) return {std::nan(""), std::nan("")};
+  return {plane->evaluate(query), plane->variance_scale};
+}
+
+TEST(MapCorrespondence, PlaneVarianceMatchesTheFitsScatter) {
+  std::mt19937 rng(7);
+  const double sigma = 0.01;
+  for (const double query_x : {0.3, 0.9}) {
+    double sum_r2 = 0.0;
+    double sum_predicted = 0.0;
+    int n = 0;
+    for (int trial = 0; trial < 4000; ++trial) {
+      const StripTrial t = strip_trial(rng, sigma, query_x, true);
+      ASSERT_TRUE(std::isfinite(t.residual));
+      sum_r2 += t.residual * t.residual;
+      sum_predicted += (t.variance_scale - 1.0) * sigma * sigma;  // minus the query's own noise (exact here)
+      ++n;
+    }
+    // The fitted plane's scatter at the query, against what variance_scale predicts for it.
+    EXPECT_NEAR(sum_r2 / sum_predicted, 1.0, 0.15) << "query at x = " << query_x;
+  }
+  // Beyond the strip's end the tilt matters: several times the variance at its middle.
+  std::mt19937 again(8);
+  const double inside = strip_trial(again, sigma, 0.3, true).variance_scale;
+  const double beyond = strip_trial(again, sigma, 0.9, true).variance_scale;
+  EXPECT_LT(inside, 1.5);
+  EXPECT_GT(beyond, 3.0 * (inside - 1.0) + 1.0);
+  EXPECT_EQ(strip_trial(again, sigma, 0.9, false).variance_scale, 1.0);
+}
+
+TEST(MapCorrespondence, LineVarianceGrowsAlongTheLine) {
+  liod::LocalMap map(1.0, liod::LocalMap::kMaxPointsPerVoxel, 0.0);
+  std::vector<Eigen::Vector3d> pole;
+  for (int i = 0; i < 8; ++i) pole.emplace_back(0.5 + 0.002 * (i % 2), 0.5, 0.1 + 0.05 * i);  // a vertical edge
+  map.add(pole, 0);
+  liod::CorrespondenceParams params;
+  params.neighbours = 8;
+  params.max_distance_m = 1.0;
+  liod::LocalMap::NeighbourSearch search(map);
+  const auto level = liod::line_correspondence(search, {0.6, 0.5, 0.275}, params);   // beside its middle
+  const auto above = liod::line_correspondence(search, {0.6, 0.5, 0.9}, params);     // past its top
+  ASSERT_TRUE(level && above);
+  EXPECT_NEAR(level->evaluate({0.6, 0.5, 0.275}), 0.1, 0.005);
+  EXPECT_LT(level->variance_scale, 1.2);
+  EXPECT_GT(above->variance_scale, 2.0);
+}
+
+// A post seen from the LiDAR: a point displaced across the ray (where the beam grazed the post)
+// moves the point-to-line residual, not the residual along the ray; a range error moves both.
+TEST(MapCorrespondence, AlongTheRayOnlyTheRangeCounts) {
+  liod::LocalMap map(1.0, liod::LocalMap::kMaxPointsPerVoxel, 0.0);
+  std::vector<Eigen::Vector3d> post;
+  for (int i = 0; i < 8; ++i) post.emplace_back(5.5 + 0.002 * (i % 2), 0.5, 0.1 + 0.1 * i);
+  map.add(post, 0);
+  liod::CorrespondenceParams params;
+  params.neighbours = 8;
+  params.max_distance_m = 1.0;
+  const Eigen::Vector3d sensor(0.5, 0.5, 0.4);
+  const Eigen::Vector3d across(5.501, 0.55, 0.4);  // 5 cm beside the post, seen from the sensor
+  const Eigen::Vector3d behind(5.551, 0.5, 0.4);   // 5 cm too far
+  liod::LocalMap::NeighbourSearch search(map);
+  const auto shortest = liod::line_correspondence(search, across, params);
+  const auto ray_across = liod::line_correspondence(search, across, params, &sensor);
+  const auto ray_behind = liod::line_correspondence(search, behind, params, &sensor);
+  ASSERT_TRUE(shortest && ray_across && ray_behind);
+  EXPECT_NEAR(std::abs(shortest->evaluate(across)), 0.05, 0.002);
+  EXPECT_LT(std::abs(ray_across->evaluate(across)), 0.002);
+  EXPECT_NEAR(ray_behind->evaluate(behind), 0.05, 0.002);
+  EXPECT_NEAR(ray_behind->normal.dot(Eigen::Vector3d::UnitX()), 1.0, 1e-3);
+}
+
+}  // namespace
