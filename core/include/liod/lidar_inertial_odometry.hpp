@@ -115,8 +115,8 @@ class LidarInertialOdometry {
   bool initialized_ = false;
   bool map_trusted_ = false;
   std::optional<Scan> first_scan_;  // a rolling start's first scan, until the second gives the speed
-  // A rolling start: the forward accelerometer bias is kept out of the LiDAR update until a scan
-  // constrains the along-track position (process_scan explains why).
+  // The forward accelerometer bias is kept out of the next LiDAR update: at a rolling start, and
+  // after a scan that left the along-track position unconstrained (process_scan explains why).
   bool hold_forward_accel_bias_ = false;
   NavState state_;
   StateCovariance covariance_ = StateCovariance::Zero();
