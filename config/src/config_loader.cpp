@@ -252,6 +252,7 @@ Schema declare_schema(Config& c) {
   s.integer("odometry.map_points_per_voxel", &o.map_points_per_voxel, 1, 1000);
   s.real("odometry.map_min_point_spacing_m", &o.map_min_point_spacing_m, 0.0, 5.0);
   s.integer("odometry.max_iterations", &o.max_iterations, 1, 50);
+  s.integer("odometry.forced_searches", &o.forced_searches, 1, 50);
   s.real("odometry.lidar_noise_m", &o.lidar_noise_m, 1e-4, 10.0);
   s.real("odometry.max_correspondence_m", &o.max_correspondence_m, 0.05, 20.0);
   s.integer("odometry.correspondence_neighbours", &o.correspondence_neighbours, 3, 8);

@@ -144,7 +144,7 @@ UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior
   for (int iteration = 0; iteration < params.max_iterations; ++iteration) {
     // Search again while the pose still moves noticeably since the last search.
     const Vector15 moved = boxminus(x, searched_at);
-    const bool search = iteration < 2 || moved.segment<3>(0).norm() > params.research_rotation_rad ||
+    const bool search = iteration < params.forced_searches || moved.segment<3>(0).norm() > params.research_rotation_rad ||
                         moved.segment<3>(3).norm() > params.research_translation_m;
     if (search) searched_at = x;
     eq = Normal6{};

@@ -153,6 +153,7 @@ LidarInertialOdometry::LidarInertialOdometry(const Config& config)
   noise_.gyro_bias_random_walk = config.imu.gyro_bias_random_walk;
   noise_.accel_bias_random_walk = config.imu.accel_bias_random_walk;
   update_params_.max_iterations = config.odometry.max_iterations;
+  update_params_.forced_searches = config.odometry.forced_searches;
   update_params_.lidar_noise_m = config.odometry.lidar_noise_m;
   update_params_.correspondence.neighbours = config.odometry.correspondence_neighbours;
   update_params_.correspondence.max_distance_m = config.odometry.correspondence_gate_m;

@@ -81,6 +81,7 @@ struct OdometryConfig {
   int map_points_per_voxel = 20;
   double map_min_point_spacing_m = 0.2;
   int max_iterations = 5;
+  int forced_searches = 1;  // iterations that search the map afresh; later ones only if the pose moved
   double lidar_noise_m = 0.03;       // std of a point-to-plane/line residual
   double max_correspondence_m = 0.5; // loop registration (backend)
   int correspondence_neighbours = 8;     // map neighbours of a plane / line correspondence (front end)

@@ -20,7 +20,9 @@ struct UpdateParams {
   int max_iterations = 5;
   double lidar_noise_m = 0.03;
   CorrespondenceParams correspondence;
-  // After two searches, neighbours are searched again only if the pose moved more than this.
+  /// Iterations that search the map's neighbours afresh; later ones search again only if the pose
+  /// moved more than research_translation_m / research_rotation_rad since the last search.
+  int forced_searches = 1;
   double research_translation_m = 0.02;
   double research_rotation_rad = 0.002;
   /// Directions of the LiDAR information (eigenvalues of sum w h^T h, i.e. a weighted count of
