@@ -431,10 +431,9 @@ void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& resul
     // eigenvalue 0.1-2, against ~400 in town): the first maps' ground rings pull each scan
     // towards the previous keyframes (a standstill) by 0.1-0.2 m a scan, and with nothing to
     // tell the two apart the filter took that as a forward accelerometer bias of 0.5-0.8 m/s^2
-    // (the simulated one is -0.1) and the speed decayed through zero. A static start learns that
-    // bias while standing; a rolling start keeps its prior (init_accel_bias_std) until a scan
-    // constrains the along-track position, the velocity taking the corrections meanwhile; so does
-    // any scan after one that left the along-track position unconstrained (below).
+    // (the simulated one is -0.1) and the speed decayed through zero. So a rolling start, and any
+    // scan after one that left the along-track position unconstrained (below), keeps the bias's
+    // prior along the forward axis, the velocity taking the corrections meanwhile.
     if (hold_forward_accel_bias_) decouple_accel_bias_along(predicted_covariance, config_.odometry.forward_axis);
     UpdateResult update = iterated_update(predicted, predicted_covariance, features.planes, plane_map_, features.edges,
                                           edge_map_, update_params_);
@@ -449,10 +448,8 @@ void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& resul
       update = iterated_update(predicted, predicted_covariance, features.planes, plane_map_, features.edges, edge_map_,
                                update_params_);
     }
-    // Not only at a rolling start: wherever a scan leaves the along-track position weak (highway,
-    // tunnel, and the first metres of a static start, where the map's standstill pulls the scans
-    // back), the next one leaves the forward bias alone. Highway seed 1, 60 s, static start:
-    // 6.25 -> 0.43 m ATE (docs/odometry.md, 2026-11-29).
+    // Highway, tunnel, and the first metres of a static start, whose map of the standstill pulls
+    // the scans back (highway seed 1, 60 s, static start: 6.25 -> 0.43 m ATE; docs/odometry.md).
     hold_forward_accel_bias_ = update.min_translation_eigenvalue < config_.odometry.degeneracy_eigenvalue;
     state_ = update.state;
     state_.time = t_end;
