@@ -11,28 +11,6 @@
 
 namespace liod {
 
-using Vector15 = Eigen::Matrix<double, 15, 1>;
-
-NavState boxplus(const NavState& x, const Vector15& delta) {
-  NavState out = x;
-  out.rotation = so3::normalize(x.rotation * so3::exp(delta.segment<3>(0)));
-  out.position += delta.segment<3>(3);
-  out.velocity += delta.segment<3>(6);
-  out.gyro_bias += delta.segment<3>(9);
-  out.accel_bias += delta.segment<3>(12);
-  return out;
-}
-
-Vector15 boxminus(const NavState& a, const NavState& b) {
-  Vector15 d;
-  d.segment<3>(0) = so3::log(b.rotation.transpose() * a.rotation);
-  d.segment<3>(3) = a.position - b.position;
-  d.segment<3>(6) = a.velocity - b.velocity;
-  d.segment<3>(9) = a.gyro_bias - b.gyro_bias;
-  d.segment<3>(12) = a.accel_bias - b.accel_bias;
-  return d;
-}
-
 namespace {
 
 struct Normal6 {
@@ -112,9 +90,9 @@ void accumulate(const std::vector<Eigen::Vector3d>& points_body, const NavState&
 // Adds the vehicle constraint u^T R^T v = 0 to the MAP normal equations. With R = R^ Exp(dtheta),
 // R^T v = (I - [dtheta]x) R^T v, so d/d dtheta = u^T [v_b]x and d/d dv = u^T R^T.
 void add_vertical_velocity_constraint(const NavState& x, const UpdateParams& params, StateCovariance& information,
-                                      Vector15& rhs) {
+                                      StateVector& rhs) {
   const Eigen::Vector3d velocity_body = x.rotation.transpose() * x.velocity;
-  Eigen::Matrix<double, 1, 15> h = Eigen::Matrix<double, 1, 15>::Zero();
+  Eigen::Matrix<double, 1, kStateDim> h = Eigen::Matrix<double, 1, kStateDim>::Zero();
   h.segment<3>(0) = params.vertical_axis.transpose() * so3::hat(velocity_body);
   h.segment<3>(6) = params.vertical_axis.transpose() * x.rotation.transpose();
   const double r = params.vertical_axis.dot(velocity_body);
@@ -143,7 +121,7 @@ UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior
   int degenerate_directions = 0;
   for (int iteration = 0; iteration < params.max_iterations; ++iteration) {
     // Search again while the pose still moves noticeably since the last search.
-    const Vector15 moved = boxminus(x, searched_at);
+    const StateVector moved = boxminus(x, searched_at);
     const bool search = iteration < params.forced_searches || moved.segment<3>(0).norm() > params.research_rotation_rad ||
                         moved.segment<3>(3).norm() > params.research_translation_m;
     if (search) searched_at = x;
@@ -172,10 +150,10 @@ UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior
     // MAP step: (P^-1 + H^T W H) delta = -H^T W r - P^-1 (x (-) prior)   (iterated EKF).
     information = prior_information;
     information.topLeftCorner<6, 6>() += inv_var * projector * eq.hessian * projector;
-    Vector15 rhs = -prior_information * boxminus(x, prior);
+    StateVector rhs = -prior_information * boxminus(x, prior);
     rhs.head<6>() -= inv_var * projector * eq.gradient;
     if (params.vertical_velocity_std > 0.0) add_vertical_velocity_constraint(x, params, information, rhs);
-    const Vector15 delta = information.ldlt().solve(rhs);
+    const StateVector delta = information.ldlt().solve(rhs);
     if (!delta.allFinite()) break;
     x = boxplus(x, delta);
     result.iterations = iteration + 1;

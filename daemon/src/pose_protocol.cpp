@@ -187,7 +187,7 @@ void RequestReader::feed(std::string_view bytes, ClientMode& mode) {
   }
 }
 
-Eigen::Matrix<double, 6, 6> pose_covariance_from_state(const Eigen::Matrix<double, 15, 15>& s) {
+Eigen::Matrix<double, 6, 6> pose_covariance_from_state(const Eigen::Ref<const Eigen::MatrixXd>& s) {
   // Filter order: [rotation 0..2, position 3..5, ...]; the message order is [position, rotation].
   Eigen::Matrix<double, 6, 6> c;
   c.block<3, 3>(0, 0) = s.block<3, 3>(3, 3);

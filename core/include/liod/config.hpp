@@ -94,6 +94,9 @@ struct OdometryConfig {
   double hausdorff_threshold_m = 0.6; // h1
   double hausdorff_voxel_m = 1.0;     // clouds are downsampled to this before the Hausdorff test
   int window_keyframes = 25;
+  /// A scan whose registration moves the pose further than this from the IMU prediction (squared
+  /// Mahalanobis distance over the 6 pose dimensions) is not let to update the biases and gravity.
+  double max_prediction_nis = 200.0;
   double degeneracy_eigenvalue = 30.0;  // LiDAR information (weighted residual count) below which a direction is degenerate
   bool degeneracy_projection = false;   // true: degenerate directions get no LiDAR update (else flagged only)
   double init_gyro_bias_std = 0.01;      // rad/s

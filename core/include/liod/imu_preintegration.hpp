@@ -27,6 +27,10 @@ struct NavState {
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
   Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();
   Eigen::Vector3d accel_bias = Eigen::Vector3d::Zero();
+  /// Gravity in the world frame. The world is the first pose's frame, levelled by the start-up
+  /// alignment, which takes the accelerometer's turn-on bias for tilt (0.3-0.6 deg a 0.05-0.1 m/s^2
+  /// bias, more at a rolling start): the odometry estimates its direction (FAST-LIO2's S2 state).
+  Eigen::Vector3d gravity{0.0, 0.0, -9.80665};
 };
 
 class ImuPreintegration {

@@ -1,20 +1,18 @@
 #pragma once
 // Scan-to-local-map registration, tightly coupled with the IMU: an iterated error-state Kalman
 // update (a Gauss-Newton MAP estimate) whose prior is the IMU-predicted state and covariance.
-// The 15-dim error state is [dtheta (right perturbation of R), dp, dv, dbg, dba]; LiDAR residuals
-// touch only the pose, and the prior's cross-covariances carry their information into velocity
-// and biases.
+// The error state is error_state.hpp's; LiDAR residuals touch only the pose, and the prior's
+// cross-covariances carry their information into velocity, biases and gravity.
 
 #include <Eigen/Core>
 #include <optional>
 #include <vector>
 
+#include "liod/error_state.hpp"
 #include "liod/imu_preintegration.hpp"
 #include "liod/map_correspondence.hpp"
 
 namespace liod {
-
-using StateCovariance = Eigen::Matrix<double, 15, 15>;
 
 struct UpdateParams {
   int max_iterations = 5;
@@ -52,11 +50,6 @@ struct UpdateResult {
   /// How many of the 6 pose directions fell below UpdateParams::degeneracy_eigenvalue.
   int degenerate_directions = 0;
 };
-
-/// x (+) delta, with the rotation perturbed on the right.
-NavState boxplus(const NavState& x, const Eigen::Matrix<double, 15, 1>& delta);
-/// The error state taking b to a: a = b (+) (a (-) b).
-Eigen::Matrix<double, 15, 1> boxminus(const NavState& a, const NavState& b);
 
 UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior_covariance,
                              const std::vector<Eigen::Vector3d>& planes_body, const LocalMap& plane_map,

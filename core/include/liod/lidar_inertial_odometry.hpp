@@ -71,13 +71,15 @@ class LidarInertialOdometry {
   /// data around the scan). Points must carry per-point times.
   std::optional<OdometryResult> process(const Scan& scan);
 
-  /// The gravity vector in the world frame the states are propagated with.
-  const Eigen::Vector3d& gravity() const { return gravity_; }
+  /// The gravity vector in the world frame (estimated) that the states are propagated with.
+  const Eigen::Vector3d& gravity() const { return state_.gravity; }
 
   bool initialized() const { return initialized_; }
   const std::deque<Keyframe>& keyframes() const { return keyframes_; }
   const LocalMap& plane_map() const { return plane_map_; }
   std::size_t dropped_imu_samples() const { return dropped_imu_; }
+  /// Scans whose IMU prediction the LiDAR contradicted beyond odometry.max_prediction_nis.
+  std::size_t inconsistent_imu_scans() const { return inconsistent_imu_scans_; }
 
  private:
   struct Features {
@@ -104,7 +106,6 @@ class LidarInertialOdometry {
   Config config_;
   ExtrinsicsConfig extrinsics_;
   Pose lidar_to_imu_;
-  Eigen::Vector3d gravity_;
   ImuNoise noise_;
   UpdateParams update_params_;
   FeatureExtractor extractor_;
@@ -112,6 +113,7 @@ class LidarInertialOdometry {
 
   std::deque<ImuSample> imu_;
   std::size_t dropped_imu_ = 0;
+  std::size_t inconsistent_imu_scans_ = 0;
   bool initialized_ = false;
   bool map_trusted_ = false;
   std::optional<Scan> first_scan_;  // a rolling start's first scan, until the second gives the speed

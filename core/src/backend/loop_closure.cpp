@@ -317,7 +317,7 @@ LoopCheck check_loop(KeyframeStore& keyframes, const std::vector<Eigen::Isometry
   for (int round = 0; round < kRounds; ++round) {
     params.correspondence.max_distance_m = round < 2 ? coarse_gate : fine_gate;
     result = iterated_update(x, weak, planes, plane_map, edges, edge_map, params);
-    const Eigen::Matrix<double, 15, 1> moved = boxminus(result.state, x);
+    const StateVector moved = boxminus(result.state, x);
     x = result.state;
     if (round >= 2 && moved.segment<3>(0).norm() < 0.05 * kDegToRad && moved.segment<3>(3).norm() < 0.01) {
       check.converged = true;

@@ -109,8 +109,8 @@ class RequestReader {
   bool overlong_ = false;  // inside a line already longer than kMaxLine
 };
 
-/// The 6x6 pose covariance [position, rotation] from the filter's 15x15 error-state covariance
-/// ordered [rotation, position, velocity, gyro bias, accel bias].
-Eigen::Matrix<double, 6, 6> pose_covariance_from_state(const Eigen::Matrix<double, 15, 15>& state_covariance);
+/// The 6x6 pose covariance [position, rotation] from the filter's error-state covariance
+/// ordered [rotation, position, velocity, gyro bias, accel bias, gravity direction] (any size >= 6).
+Eigen::Matrix<double, 6, 6> pose_covariance_from_state(const Eigen::Ref<const Eigen::MatrixXd>& state_covariance);
 
 }  // namespace liod::pose
