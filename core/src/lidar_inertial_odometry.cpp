@@ -473,6 +473,7 @@ void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& resul
       update = iterated_update(predicted, predicted_covariance, features.planes, plane_map_, features.edges, edge_map_,
                                update_params_);
       ++inconsistent_imu_scans_;
+      result.status |= kStatusImuInconsistent;
     }
     state_ = update.state;
     state_.time = t_end;

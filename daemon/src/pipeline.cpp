@@ -24,11 +24,13 @@ std::uint32_t status_flags(std::uint32_t odometry_status) {
   if (odometry_status & kStatusImuGap) f |= pose::kImuLost;
   if (odometry_status & kStatusKeyframe) f |= pose::kKeyframe;
   if (odometry_status & kStatusFewFeatures) f |= pose::kFewFeatures;
+  if (odometry_status & kStatusImuInconsistent) f |= pose::kImuInconsistent;
   return f;
 }
 
 std::uint32_t with_ok(std::uint32_t f) {
-  constexpr std::uint32_t kBad = pose::kInitializing | pose::kDegenerate | pose::kImuLost | pose::kLidarLost;
+  constexpr std::uint32_t kBad =
+      pose::kInitializing | pose::kDegenerate | pose::kImuLost | pose::kLidarLost | pose::kImuInconsistent;
   return (f & kBad) == 0 ? f | pose::kOk : f;
 }
 
@@ -294,6 +296,7 @@ void Pipeline::odometry_thread() {
     totals_.front_end_ms.push_back(ms);
     last_process_ms_.store(ms + result->map_ms, std::memory_order_relaxed);
     if (result->status & kStatusDegenerate) ++totals_.degenerate;
+    if (result->status & kStatusImuInconsistent) imu_inconsistent_scans_.fetch_add(1, std::memory_order_relaxed);
     if (result->status & kStatusKeyframe) ++totals_.keyframes;
     PoseEvent ev;
     ev.message.type = pose::MessageType::ScanPose;
@@ -527,6 +530,7 @@ std::string Pipeline::health_json(HealthRates& rates) const {
     << ",\"odometry_dropped\":" << odometry_imu_dropped_.load() << ",\"pps_correction_s\":" << static_cast<double>(imu_out_->pps_correction_ns.load()) * 1e-9
     << "},\"odometry\":{\"scans\":" << scans << ",\"scan_rate_hz\":" << rate(scans, rates.scans)
     << ",\"last_process_ms\":" << last_process_ms_.load() << ",\"imu_poses_withheld\":" << imu_poses_withheld_.load()
+    << ",\"imu_inconsistent_scans\":" << imu_inconsistent_scans_.load()
     << "},\"rings\":{";
   ring("scan", scan_ring_);
   j << ',';

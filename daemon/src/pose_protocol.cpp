@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <iterator>
 
 namespace liod::pose {
 namespace {
@@ -86,9 +87,10 @@ void encode_health(const std::string& json, std::uint32_t sequence, std::vector<
 }
 
 std::string flag_names(std::uint32_t flags) {
-  static const char* kNames[] = {"initializing", "ok", "degenerate", "imu_lost", "lidar_lost", "keyframe", "few_features", "clock_jump"};
+  static const char* kNames[] = {"initializing", "ok",           "degenerate", "imu_lost",        "lidar_lost",
+                                 "keyframe",     "few_features", "clock_jump", "imu_inconsistent"};
   std::string s;
-  for (int i = 0; i < 8; ++i) {
+  for (int i = 0; i < static_cast<int>(std::size(kNames)); ++i) {
     if ((flags & (1U << i)) == 0) continue;
     if (!s.empty()) s += '|';
     s += kNames[i];

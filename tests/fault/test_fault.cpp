@@ -99,6 +99,7 @@ TEST(FaultInjection, CleanDriveReference) {
   const auto run = run_with_faults(*drive, {});
   common_checks(*drive, run, "no fault (reference)", 0.0);
   expect_ok_from(*drive, run, 1.0, "clean");
+  EXPECT_EQ(count_flag(run.poses, kScan, pose::kImuInconsistent, 0.0, 1e300).flagged, 0U);
 }
 
 TEST(FaultInjection, Drop10PercentOfPackets) {
@@ -222,6 +223,10 @@ void imu_clock_jump(double by) {
   const auto run = run_with_faults(*drive, {"clock-jump:sensor=imu,at=10,by=" + seconds(by)});
   const std::string name = "IMU clock steps " + seconds(by) + " s (accuracy not kept)";
   common_checks(*drive, run, name, 10.0 + std::abs(by), std::numeric_limits<double>::infinity());
+  // The gyro's turn (13-15 s) arrives a second off the LiDAR's: those scans say so.
+  const auto inconsistent = count_flag(run.poses, kScan, pose::kImuInconsistent, drive->at(10.0), 1e300);
+  print_flags("scan poses flagged imu_inconsistent after the step", inconsistent);
+  EXPECT_GE(inconsistent.flagged, 3U) << name;
   if (by > 0) {
     const auto gap = count_flag(run.poses, kScan, pose::kImuLost, drive->at(10.1), drive->at(10.0 + by));
     print_flags("scan poses flagged imu_lost in the stamp gap", gap);

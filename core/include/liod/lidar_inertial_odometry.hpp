@@ -28,6 +28,7 @@ enum OdometryStatus : std::uint32_t {
   kStatusImuGap = 1U << 3,
   kStatusFewFeatures = 1U << 4,
   kStatusSpeedUnknown = 1U << 5,  // the first scan: attitude and origin only, the speed comes with the next
+  kStatusImuInconsistent = 1U << 6,  // the LiDAR contradicted the IMU prediction (odometry.max_prediction_nis)
 };
 
 struct Keyframe {

@@ -219,6 +219,7 @@ class Pipeline {
   std::atomic<bool> imu_done_{false};
   OdometryTotals totals_;
   std::atomic<std::uint64_t> scans_processed_{0}, backend_keyframes_{0}, host_jumps_{0}, odometry_imu_dropped_{0};
+  std::atomic<std::uint64_t> imu_inconsistent_scans_{0};
   std::atomic<std::int64_t> host_jump_steady_ns_{0};
   std::atomic<double> last_process_ms_{0.0};
   LatencyStats scan_latency_, imu_latency_, scan_receive_, scan_wait_, scan_process_, scan_publish_;

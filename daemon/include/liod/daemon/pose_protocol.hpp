@@ -54,6 +54,7 @@ enum Flag : std::uint32_t {
   kKeyframe = 1U << 5,      ///< this scan became a keyframe
   kFewFeatures = 1U << 6,   ///< too few features for a reliable update
   kClockJump = 1U << 7,     ///< a clock stepped within time.jump_flag_s, or the LiDAR's clock jumped in this scan or disagrees with the host
+  kImuInconsistent = 1U << 8,  ///< the scan's registration contradicted the IMU prediction far beyond its covariance
 };
 
 struct PoseMessage {
