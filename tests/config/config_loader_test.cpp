@@ -52,6 +52,9 @@ TEST(ConfigLoader, OutOfRangeIsRejected) {
   EXPECT_NE(msg.find("[1, 65535]"), std::string::npos) << msg;
   EXPECT_NE(error_of("odometry:\n  lidar_noise_m: .nan\n"), "");
   EXPECT_NE(error_of("odometry:\n  deskew: sometimes\n").find("imu"), std::string::npos);
+  EXPECT_NE(error_of("odometry:\n  hold_release_yaw_rate_deg_s: -1\n").find("odometry.hold_release_yaw_rate_deg_s"),
+            std::string::npos);
+  EXPECT_EQ(error_of("odometry:\n  hold_release_yaw_rate_deg_s: 0\n"), "");  // always held (the ablation)
 }
 
 TEST(ConfigLoader, RelationsBetweenKeysAreChecked) {

@@ -98,6 +98,9 @@ struct OdometryConfig {
   /// Mahalanobis distance over the 6 pose dimensions) is not let to update the biases and gravity.
   double max_prediction_nis = 200.0;
   double degeneracy_eigenvalue = 30.0;  // LiDAR information (weighted residual count) below which a direction is degenerate
+  /// After a degenerate scan the forward accelerometer bias and gravity tilt are held, except while
+  /// the vehicle turns faster than this (deg/s, IMU yaw rate): the turn separates the two. 0: always held.
+  double hold_release_yaw_rate_deg_s = 5.0;
   bool degeneracy_projection = false;   // true: degenerate directions get no LiDAR update (else flagged only)
   double init_gyro_bias_std = 0.01;      // rad/s
   double init_accel_bias_std = 0.2;      // m/s^2

@@ -121,6 +121,7 @@ class LidarInertialOdometry {
   // The forward accelerometer bias is kept out of the next LiDAR update: at a rolling start, and
   // after a scan that left the along-track position unconstrained (process_scan explains why).
   bool hold_forward_accel_bias_ = false;
+  int scans_since_imu_inconsistent_ = 0;
   NavState state_;
   StateCovariance covariance_ = StateCovariance::Zero();
   Eigen::Vector3d last_angular_rate_ = Eigen::Vector3d::Zero();  // body frame, for constant-velocity deskew

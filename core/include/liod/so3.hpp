@@ -36,6 +36,12 @@ inline Eigen::Matrix3d right_jacobian(const Eigen::Vector3d& phi) {
   return Eigen::Matrix3d::Identity() - (1.0 - std::cos(angle)) / a2 * w + (angle - std::sin(angle)) / (a2 * angle) * w * w;
 }
 
+/// Mean rate (rad/s) at which a body turned from `from` to `to` (body-to-world rotations) over
+/// dt seconds, about the world axis `axis` (unit): a vehicle's yaw rate with axis = up.
+inline double turn_rate_about(const Eigen::Matrix3d& from, const Eigen::Matrix3d& to, const Eigen::Vector3d& axis, double dt) {
+  return (from * log(from.transpose() * to)).dot(axis) / dt;
+}
+
 /// Re-orthonormalises a rotation that accumulated rounding error.
 inline Eigen::Matrix3d normalize(const Eigen::Matrix3d& r) { return Eigen::Quaterniond(r).normalized().toRotationMatrix(); }
 
