@@ -464,6 +464,7 @@ void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& resul
     // (the simulated one is -0.1) and the speed decayed through zero. So a rolling start, and any
     // scan after one that left the along-track position unconstrained (below), keeps the bias's
     // prior along the forward axis, the velocity taking the corrections meanwhile.
+    result.forward_hold = hold_forward_accel_bias_;
     if (hold_forward_accel_bias_) hold_forward_acceleration(predicted_covariance, predicted, config_.odometry.forward_axis);
     UpdateResult update = iterated_update(predicted, predicted_covariance, features.planes, plane_map_, features.edges,
                                           edge_map_, update_params_);
@@ -503,6 +504,7 @@ void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& resul
     state_ = update.state;
     state_.time = t_end;
     covariance_ = update.covariance;
+    result.velocity_correction_body = state_.rotation.transpose() * (state_.velocity - predicted.velocity);
     result.residuals = update.residuals;
     result.iterations = update.iterations;
     result.rms_residual_m = update.rms_residual_m;

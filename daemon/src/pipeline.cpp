@@ -322,6 +322,13 @@ void Pipeline::odometry_thread() {
     d.features_ms = result->features_ms;
     d.registration_ms = result->registration_ms;
     d.map_ms = result->map_ms;
+    const Eigen::Matrix3d world_to_body = result->state.rotation.transpose();
+    d.velocity_body = world_to_body * result->state.velocity;
+    d.velocity_correction_body = result->velocity_correction_body;
+    d.accel_bias = result->state.accel_bias;
+    d.gyro_bias = result->state.gyro_bias;
+    d.gravity_body = world_to_body * result->state.gravity;
+    d.forward_hold = result->forward_hold;
     ev.input_steady_ns = item.ready_steady_ns - item.queued_ns;
     ev.queued_ns = item.queued_ns;
     ev.process_start_ns = start_ns;

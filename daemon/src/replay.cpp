@@ -68,7 +68,10 @@ int run_replay(const Config& config, const ReplayOptions& options, std::ostream&
     scan_log.open(options.scan_log_csv);
     if (!scan_log) throw std::runtime_error(options.scan_log_csv + ": cannot open for writing");
     scan_log << "time,status,points,edges,planes,residuals,iterations,rms_m,min_eigenvalue,hausdorff_m,"
-                "deskew_ms,features_ms,registration_ms,map_ms\n";
+                "deskew_ms,features_ms,registration_ms,map_ms,"
+                "velocity_x,velocity_y,velocity_z,velocity_correction_x,velocity_correction_y,velocity_correction_z,"
+                "accel_bias_x,accel_bias_y,accel_bias_z,gyro_bias_x,gyro_bias_y,gyro_bias_z,"
+                "gravity_x,gravity_y,gravity_z,forward_hold\n";
   }
 
   PipelineOptions po;
@@ -101,7 +104,11 @@ int run_replay(const Config& config, const ReplayOptions& options, std::ostream&
       scan_log << std::fixed << std::setprecision(6) << m.time << ',' << d.status << ',' << d.points << ',' << d.edges
                << ',' << d.planes << ',' << d.residuals << ',' << d.iterations << ',' << std::setprecision(4) << d.rms_m
                << ',' << d.min_eigenvalue << ',' << d.hausdorff_m << ',' << d.deskew_ms << ',' << d.features_ms << ','
-               << d.registration_ms << ',' << d.map_ms << '\n';
+               << d.registration_ms << ',' << d.map_ms << std::setprecision(6);
+      for (const Eigen::Vector3d* v : {&d.velocity_body, &d.velocity_correction_body, &d.accel_bias, &d.gyro_bias, &d.gravity_body}) {
+        scan_log << ',' << v->x() << ',' << v->y() << ',' << v->z();
+      }
+      scan_log << ',' << (d.forward_hold ? 1 : 0) << '\n';
     }
   });
   auto pcap_source = std::make_unique<PcapLidarSource>(options.pcap, ports, pace);

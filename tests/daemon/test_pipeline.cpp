@@ -6,7 +6,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -49,6 +51,46 @@ class GatedSource : public LidarSource {
   const std::atomic<bool>& go_;
 };
 
+// The scan log's filter state agrees with the trajectory written beside it: its body-frame speed
+// with the poses' differences, its gravity has the configured magnitude, its biases are a MEMS
+// IMU's, and the hold flag is a flag.
+void expect_scan_log_state_matches_trajectory(const std::filesystem::path& log, const std::vector<test::TumPose>& poses) {
+  std::ifstream in(log);
+  std::string header;
+  std::getline(in, header);
+  ASSERT_NE(header.find(",velocity_x,"), std::string::npos) << header;
+  const std::string last = "gravity_z,forward_hold";
+  ASSERT_EQ(header.substr(header.size() - last.size()), last) << header;
+  std::map<long long, std::vector<double>> rows;  // by time in ms
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<double> f;
+    std::istringstream fields(line);
+    std::string field;
+    while (std::getline(fields, field, ',')) f.push_back(std::strtod(field.c_str(), nullptr));
+    ASSERT_EQ(f.size(), 30U) << line;
+    rows[std::llround(f[0] * 1000.0)] = f;
+  }
+  ASSERT_GT(rows.size(), 50U);
+  std::vector<double> speed_errors;
+  for (std::size_t i = 1; i + 1 < poses.size(); ++i) {
+    const auto row = rows.find(std::llround(poses[i].t * 1000.0));
+    if (row == rows.end()) continue;
+    const auto& f = row->second;
+    const double logged = std::hypot(f[14], f[15], f[16]);
+    const double dt = poses[i + 1].t - poses[i - 1].t;
+    const double moved = std::hypot(poses[i + 1].x - poses[i - 1].x, poses[i + 1].y - poses[i - 1].y, poses[i + 1].z - poses[i - 1].z);
+    speed_errors.push_back(std::abs(logged - moved / dt));
+    EXPECT_NEAR(std::hypot(f[26], f[27], f[28]), 9.80665, 1e-3);
+    for (int axis = 20; axis < 23; ++axis) EXPECT_LT(std::abs(f[axis]), 0.5);  // m/s^2
+    for (int axis = 23; axis < 26; ++axis) EXPECT_LT(std::abs(f[axis]), 0.05);  // rad/s
+    EXPECT_TRUE(f[29] == 0.0 || f[29] == 1.0);
+  }
+  ASSERT_GT(speed_errors.size(), 50U);
+  std::sort(speed_errors.begin(), speed_errors.end());
+  EXPECT_LT(speed_errors[speed_errors.size() / 2], 0.1) << "median |logged speed - speed from the poses| (m/s)";
+}
+
 }  // namespace
 
 TEST(Pipeline, ReplayIsDeterministic) {
@@ -60,9 +102,11 @@ TEST(Pipeline, ReplayIsDeterministic) {
   o.imu_csv = (*drive / "imu.csv").string();
   o.trajectory_tum = (dir / "scan.tum").string();
   o.imu_rate_tum = (dir / "imu.tum").string();
+  o.scan_log_csv = (dir / "scans.csv").string();
   std::ostringstream out;
   ASSERT_EQ(run_replay(drive_config(*drive), o, out), 0) << out.str();
   EXPECT_NE(out.str().find("replay: "), std::string::npos);
+  expect_scan_log_state_matches_trajectory(dir / "scans.csv", read_tum(dir / "scan.tum"));
   EXPECT_NE(out.str().find("trajectory: "), std::string::npos);
   const auto a = slurp(ref / "scan.tum");
   EXPECT_GT(read_tum(ref / "scan.tum").size(), 50U);

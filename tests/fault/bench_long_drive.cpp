@@ -98,13 +98,13 @@ std::vector<ScanTiming> read_scan_log(const fs::path& path) {
   std::vector<ScanTiming> out;
   std::ifstream in(path);
   std::string line;
-  std::getline(in, line);  // header: time,status,...,deskew_ms,features_ms,registration_ms,map_ms
+  std::getline(in, line);  // header: time,status,...,deskew_ms,features_ms,registration_ms,map_ms,(state)
   while (std::getline(in, line)) {
     std::vector<double> f;
     std::istringstream s(line);
     std::string field;
     while (std::getline(s, field, ',')) f.push_back(std::strtod(field.c_str(), nullptr));
-    if (f.size() != 14) continue;
+    if (f.size() < 14) continue;
     out.push_back({f[0], f[10] + f[11] + f[12], f[11], f[13]});
   }
   return out;

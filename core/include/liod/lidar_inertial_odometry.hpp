@@ -51,6 +51,11 @@ struct OdometryResult {
   double rms_residual_m = 0.0;
   double min_translation_eigenvalue = 0.0;
   double hausdorff_m = -1.0;  // -1 when no test ran
+  /// What the LiDAR changed in the IMU-predicted velocity (body frame): over a stretch, its mean
+  /// rate along the track is the forward acceleration error the IMU prediction makes there.
+  Eigen::Vector3d velocity_correction_body = Eigen::Vector3d::Zero();
+  /// The forward accelerometer bias and gravity tilt were held out of this scan's update.
+  bool forward_hold = false;
   double deskew_ms = 0.0;
   double features_ms = 0.0;
   double registration_ms = 0.0;

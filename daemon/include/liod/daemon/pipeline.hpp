@@ -53,6 +53,12 @@ struct ScanDiagnostics {
   int residuals = 0, iterations = 0;
   double rms_m = 0, min_eigenvalue = 0, hausdorff_m = -1;
   double deskew_ms = 0, features_ms = 0, registration_ms = 0, map_ms = 0;
+  /// The filter's state, body frame: velocity, the LiDAR's correction of the IMU-predicted
+  /// velocity, biases, gravity; whether the forward bias and tilt were held.
+  Eigen::Vector3d velocity_body = Eigen::Vector3d::Zero(), velocity_correction_body = Eigen::Vector3d::Zero();
+  Eigen::Vector3d accel_bias = Eigen::Vector3d::Zero(), gyro_bias = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gravity_body = Eigen::Vector3d::Zero();
+  bool forward_hold = false;
 };
 
 struct PoseEvent {
