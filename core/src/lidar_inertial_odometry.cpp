@@ -485,7 +485,7 @@ void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& resul
     // An IMU that contradicts the LiDAR far beyond its own covariance (a clock step, a sensor
     // gone wrong) must not teach the biases and gravity: they would carry its error on, into the
     // degenerate stretches where nothing corrects them. The scan's pose then comes from the LiDAR.
-    ++scans_since_imu_inconsistent_;
+    scans_since_imu_inconsistent_ = std::min(scans_since_imu_inconsistent_ + 1, kConsistentScansToRelease);  // no overflow in a long run
     if (prediction_nis(update.state, predicted, predicted_covariance) > config_.odometry.max_prediction_nis) {
       hold_imu_states(predicted_covariance);
       update = iterated_update(predicted, predicted_covariance, features.planes, plane_map_, features.edges, edge_map_,
