@@ -30,7 +30,12 @@ constexpr int kConsistentScansToRelease = 50;
 constexpr double kStructureRange_m = 80.0;
 constexpr double kStructureVoxel_m = 0.1;    // thinning of the structure points (3-D)
 constexpr double kFootprintRadius_m = 0.12;  // posts are 8 cm; the fine speed step moves 5 mm per 0.1 s
-constexpr double kMinSpeedScore = 20.0;      // about as many structure points matched
+constexpr double kMinSpeedScore = 20.0;      // about as many structure points matched, over all pairs
+// Without that much structure for so long (a standstill in the open), the speed is left to the
+// LiDAR's registration under the wide prior.
+constexpr double kMaxSpeedSearch_s = 2.0;
+// Below this a pair's best speed may be the rails' standstill (off_along_track_lines).
+constexpr double kStandstillSpeed = 1.0;
 
 FeatureParams feature_params(const OdometryConfig& o, const ExtrinsicsConfig& extrinsics) {
   FeatureParams p;
@@ -310,7 +315,11 @@ void LidarInertialOdometry::initialize(const Scan& scan, OdometryResult& result)
   covariance_.diagonal().segment<3>(0) << tilt * tilt, tilt * tilt, 1e-6;  // yaw defines the world frame
   covariance_.diagonal().segment<3>(3).setConstant(1e-6);                    // so does the origin
   covariance_.diagonal().segment<3>(6).setConstant(o.init_velocity_std * o.init_velocity_std);
-  first_scan_ = scan;  // the speed, unknown even at rest, is found with the next scan
+  // The speed, unknown even at rest, is searched for from the next scan on.
+  speed_search_ = SpeedSearch{};
+  speed_search_->first_end_time = scan_end_time(scan);
+  speed_search_->previous = scan;
+  speed_search_->structure.push_back(vertical_structure_points(scan));
   covariance_.diagonal().segment<3>(9).setConstant(o.init_gyro_bias_std * o.init_gyro_bias_std);
   covariance_.diagonal().segment<3>(12).setConstant(o.init_accel_bias_std * o.init_accel_bias_std);
   // The alignment's tilt error is the accelerometer bias over g: as likely as the bias itself.
@@ -327,30 +336,38 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
   if (!initialized_) {
     initialize(scan, result);
     if (!initialized_) return std::nullopt;
-    if (first_scan_) {
-      // Report the attitude only; the pose follows once the speed is known.
-      result.state = state_;
-      result.covariance = covariance_;
-      result.status |= kStatusSpeedUnknown;
+    // Report the attitude only; the pose follows once the speed is known.
+    result.state = state_;
+    result.covariance = covariance_;
+    result.status |= kStatusSpeedUnknown;
+    return result;
+  }
+  if (speed_search_) {
+    if (!(scan_end_time(scan) > scan_end_time(speed_search_->previous))) return std::nullopt;  // clock jump
+    const std::optional<double> speed = search_speed(scan);
+    if (speed || scan_end_time(scan) - speed_search_->first_end_time >= kMaxSpeedSearch_s) {
+      // Known at last (or never: the wide prior, and the LiDAR decides). The state is carried
+      // by the IMU to the scan before this one, which becomes the first keyframe. Not through
+      // all of the scans so far: with the speed this uncertain, their map pulls the speed
+      // towards a standstill scan by scan (highway seed 1, six scans: 14.5 -> 13.3 m/s).
+      if (speed) start_at_speed(*speed);
+      const Scan previous = std::move(speed_search_->previous);
+      speed_search_.reset();
+      OdometryResult first_keyframe;
+      process_scan(previous, first_keyframe);
+      result.status |= kStatusInitializing;
+      process_scan(scan, result);
       return result;
     }
-  }
-  if (first_scan_) {
-    const Scan first = std::move(*first_scan_);
-    first_scan_.reset();
-    if (initialize_velocity(first, scan)) {
-      process_scan(first, result);  // becomes the first keyframe
-      result = OdometryResult{};
-      result.points = scan.points.size();
-      result.status |= kStatusInitializing;
-    }
+    speed_search_->previous = scan;
+    return std::nullopt;  // no pose until the speed is known
   }
   if (!(scan_end_time(scan) > state_.time)) return std::nullopt;  // a scan from the past (clock jump)
   process_scan(scan, result);
   return result;
 }
 
-std::vector<LidarInertialOdometry::TimedPoint> LidarInertialOdometry::vertical_structure_points(const Scan& scan) const {
+LidarInertialOdometry::StructurePoints LidarInertialOdometry::vertical_structure_points(const Scan& scan) const {
   const auto& o = config_.odometry;
   const auto crop = feature_params(o, extrinsics_).self_crop;
   const double t0 = scan.start_time + extrinsics_.lidar_time_offset_s;
@@ -367,26 +384,36 @@ std::vector<LidarInertialOdometry::TimedPoint> LidarInertialOdometry::vertical_s
     candidates.push_back({t0 + static_cast<double>(p.time), body});
     levelled.push_back(state_.rotation * body);
   }
-  std::vector<TimedPoint> out;
   const std::vector<std::size_t> structure = vertical_structure(levelled, VerticalStructureParams{});
+  std::vector<std::size_t> thinned;
+  std::vector<Eigen::Vector3d> thinned_levelled;
   VoxelSet occupied(structure.size());
   for (const auto i : structure) {
-    if (occupied.insert(voxel_of(levelled[i], 1.0 / kStructureVoxel_m))) out.push_back(candidates[i]);
+    if (occupied.insert(voxel_of(levelled[i], 1.0 / kStructureVoxel_m))) {
+      thinned.push_back(i);
+      thinned_levelled.push_back(levelled[i]);
+    }
+  }
+  StructurePoints out;
+  for (const auto i : thinned) out.all.push_back(candidates[i]);
+  const Eigen::Vector3d forward = state_.rotation * o.forward_axis;
+  for (const auto k : off_along_track_lines(thinned_levelled, forward.head<2>(), AlongTrackLineParams{})) {
+    out.off_lines.push_back(candidates[thinned[k]]);
   }
   return out;
 }
 
-bool LidarInertialOdometry::initialize_velocity(const Scan& first, const Scan& second) {
-  // A vehicle that may already be moving: the speed is what makes the second scan land on the
-  // first. Each hypothesis (a speed along odometry.forward_axis: a car does not slide sideways)
-  // deskews both scans with the IMU and places them in one frame; their vertical structure is
-  // compared from above (speed_search.hpp explains why not the ground, and why not a local
-  // registration).
+std::optional<double> LidarInertialOdometry::search_speed(const Scan& scan) {
+  // A vehicle that may already be moving: the speed is what makes each scan land on the one
+  // before. Each hypothesis (a speed along odometry.forward_axis at the first scan: a car does
+  // not slide sideways) deskews the scans with the IMU and places them in one frame; their
+  // vertical structure is compared from above (speed_search.hpp explains why not the ground, and
+  // why not a local registration).
+  SpeedSearch& search = *speed_search_;
+  search.structure.push_back(vertical_structure_points(scan));
   const NavState base = state_;
-  const auto intervals = imu_intervals(imu_, base.time, scan_end_time(second));
-  if (intervals.empty()) return false;
-  const std::vector<TimedPoint> reference = vertical_structure_points(first);
-  const std::vector<TimedPoint> query = vertical_structure_points(second);
+  const auto intervals = imu_intervals(imu_, base.time, scan_end_time(scan));
+  if (intervals.empty()) return std::nullopt;
   auto placed = [](const std::vector<TimedPoint>& points, const PoseTable& world) {
     std::vector<Eigen::Vector3d> out;
     out.reserve(points.size());
@@ -398,28 +425,55 @@ bool LidarInertialOdometry::initialize_velocity(const Scan& first, const Scan& s
     start.velocity = base.rotation * (speed * config_.odometry.forward_axis);
     return start;
   };
-  auto score = [&](double speed) {
+  // The overlap of scan k with scan k - 1 under a speed hypothesis.
+  auto pair_score = [&](double speed, std::size_t k, std::vector<TimedPoint> StructurePoints::*points) {
     const PoseTable world = integrate_imu_poses(start_at(speed), intervals, base.gravity);
-    return FootprintOverlap(placed(reference, world), kFootprintRadius_m).score(placed(query, world));
+    return FootprintOverlap(placed(search.structure[k - 1].*points, world), kFootprintRadius_m)
+        .score(placed(search.structure[k].*points, world));
   };
   GridSearchParams speeds;
   speeds.min = -10.0;  // reversing
   speeds.max = 50.0;
   speeds.coarse_step = 0.5;
   speeds.fine_step = 0.05;
-  const GridSearchResult found = grid_search(score, speeds);
-  if (found.score < kMinSpeedScore) return false;  // no structure to tell: stay with the wide prior
-  state_.velocity = start_at(found.value).velocity;
+  const std::size_t newest = search.structure.size() - 1;
+  // All the structure: the rails along a road, their posts and ends, tell the speed of a moving
+  // vehicle best (the highway's drives: 1-3 % against up to 10 % without the rails).
+  const GridSearchResult found =
+      grid_search([&](double speed) { return pair_score(speed, newest, &StructurePoints::all); }, speeds);
+  if (found.score >= kMinSpeedScore && std::abs(found.value) >= kStandstillSpeed) return found.value;
+  // A standstill, or not enough to tell: the rails' footprints move with the sensor and vote for
+  // a standstill that may not be (off_along_track_lines), so without them, and summed over the
+  // pairs until enough structure has passed (one pair on a highway often holds a post or two).
+  const std::vector<double> hypotheses = coarse_grid(speeds);
+  search.evidence.resize(hypotheses.size(), 0.0);
+  for (std::size_t i = 0; i < hypotheses.size(); ++i) {
+    search.evidence[i] += pair_score(hypotheses[i], newest, &StructurePoints::off_lines);
+  }
+  const auto best = std::max_element(search.evidence.begin(), search.evidence.end());
+  if (*best < kMinSpeedScore) return std::nullopt;
+  const double centre = hypotheses[static_cast<std::size_t>(best - search.evidence.begin())];
+  return refine_around(
+             [&](double speed) {
+               double sum = 0.0;
+               for (std::size_t k = 1; k <= newest; ++k) sum += pair_score(speed, k, &StructurePoints::off_lines);
+               return sum;
+             },
+             centre, speeds)
+      .value;
+}
+
+void LidarInertialOdometry::start_at_speed(double speed) {
+  state_.velocity = state_.rotation * (speed * config_.odometry.forward_axis);
   // Measured 1-2 % off on the highway (rails and barrier look alike at any speed; posts, lamps
   // and trees decide), closer in town. 0.2 m/s (trusting the map at once) turned the static start
   // on the highway from 5.6 m to 61 m ATE; with 0.5 the first scans are deskewed again and the map
   // restarts once the filter has the speed, as before.
   const double speed_std = 0.5;
   covariance_.block<3, 3>(6, 6) = Eigen::Matrix3d::Identity() * speed_std * speed_std;
-  hold_forward_accel_bias_ = std::abs(found.value) > 2.0 * speed_std;  // moving for sure
+  hold_forward_accel_bias_ = std::abs(speed) > 2.0 * speed_std;  // moving for sure
   covariance_.block<3, 3>(6, 0).setZero();
   covariance_.block<3, 3>(0, 6).setZero();
-  return true;
 }
 
 void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& result) {

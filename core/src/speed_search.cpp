@@ -1,8 +1,10 @@
 #include "liod/speed_search.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 
 #include "liod/voxel_grid.hpp"
@@ -40,6 +42,50 @@ std::vector<std::size_t> vertical_structure(const std::vector<Eigen::Vector3d>& 
   return out;
 }
 
+std::vector<std::size_t> off_along_track_lines(const std::vector<Eigen::Vector3d>& points,
+                                               const Eigen::Vector2d& direction, const AlongTrackLineParams& params) {
+  const double inverse = 1.0 / params.radius_m;
+  std::unordered_map<VoxelKey, std::vector<std::size_t>, VoxelKeyHash> cells;
+  cells.reserve(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) cells[voxel_of(flat(points[i]), inverse)].push_back(i);
+  const Eigen::Vector2d along = direction.normalized();
+  const double min_cos = std::cos(params.max_angle_deg * M_PI / 180.0);
+  const double radius_squared = params.radius_m * params.radius_m;
+  std::vector<std::size_t> out;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector2d centre = points[i].head<2>();
+    const VoxelKey key = voxel_of(flat(points[i]), inverse);
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d outer = Eigen::Matrix2d::Zero();
+    int count = 0;
+    for (int dx = -1; dx <= 1; ++dx) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        const auto it = cells.find({key.x + dx, key.y + dy, 0});
+        if (it == cells.end()) continue;
+        for (const auto j : it->second) {
+          const Eigen::Vector2d d = points[j].head<2>() - centre;
+          if (d.squaredNorm() > radius_squared) continue;
+          sum += d;
+          outer += d * d.transpose();
+          ++count;
+        }
+      }
+    }
+    bool on_line = false;
+    if (count >= 3) {
+      const Eigen::Vector2d mean = sum / count;
+      const Eigen::Matrix2d covariance = outer / count - mean * mean.transpose();
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(covariance);
+      const double length = eigen.eigenvalues()(1);
+      on_line = length >= params.min_length_std_m * params.min_length_std_m &&
+                eigen.eigenvalues()(0) <= params.max_width_ratio * length &&
+                std::abs(eigen.eigenvectors().col(1).dot(along)) >= min_cos;
+    }
+    if (!on_line) out.push_back(i);
+  }
+  return out;
+}
+
 FootprintOverlap::FootprintOverlap(const std::vector<Eigen::Vector3d>& reference, double radius)
     : radius_(radius), footprint_(radius, LocalMap::kMaxPointsPerVoxel, radius / 4.0) {
   std::vector<Eigen::Vector3d> flattened;
@@ -61,30 +107,33 @@ double FootprintOverlap::score(const std::vector<Eigen::Vector3d>& query) const 
   return sum;
 }
 
-GridSearchResult grid_search(const std::function<double(double)>& score, const GridSearchParams& params) {
-  std::vector<std::pair<double, double>> coarse;  // (x, score)
-  const int coarse_count = static_cast<int>(std::floor((params.max - params.min) / params.coarse_step + 1e-9)) + 1;
-  for (int i = 0; i < coarse_count; ++i) {
-    const double x = params.min + i * params.coarse_step;
-    coarse.emplace_back(x, score(x));
-  }
-  GridSearchResult result;
-  if (coarse.empty()) return result;
-  const auto best = std::max_element(coarse.begin(), coarse.end(),
-                                     [](const auto& a, const auto& b) { return a.second < b.second; });
-  result.value = best->first;
-  result.score = best->second;
-  const double centre = best->first;
-  const int fine_half = static_cast<int>(std::round(params.coarse_step / params.fine_step));
-  for (int i = -fine_half; i <= fine_half; ++i) {
+std::vector<double> coarse_grid(const GridSearchParams& params) {
+  std::vector<double> out;
+  const int count = static_cast<int>(std::floor((params.max - params.min) / params.coarse_step + 1e-9)) + 1;
+  for (int i = 0; i < count; ++i) out.push_back(params.min + i * params.coarse_step);
+  return out;
+}
+
+GridSearchResult refine_around(const std::function<double(double)>& score, double centre, const GridSearchParams& params) {
+  GridSearchResult result{centre, score(centre)};
+  const int half = static_cast<int>(std::round(params.coarse_step / params.fine_step));
+  for (int i = -half; i <= half; ++i) {
+    if (i == 0) continue;
     const double x = centre + i * params.fine_step;
     const double s = score(x);
-    if (s > result.score) {
-      result.value = x;
-      result.score = s;
-    }
+    if (s > result.score) result = {x, s};
   }
   return result;
+}
+
+GridSearchResult grid_search(const std::function<double(double)>& score, const GridSearchParams& params) {
+  GridSearchResult best{0.0, -std::numeric_limits<double>::infinity()};
+  for (const double x : coarse_grid(params)) {
+    const double s = score(x);
+    if (s > best.score) best = {x, s};
+  }
+  if (!std::isfinite(best.score)) return {};
+  return refine_around(score, best.value, params);
 }
 
 }  // namespace liod

@@ -29,6 +29,40 @@ std::vector<Eigen::Vector3d> sparse_road_from(double x, unsigned seed) {
   return pts;
 }
 
+// Guardrails 4 m either side of a sensor 1.8 m above the road at `x`, as 16 rings see them:
+// each ring crosses a rail's band (0.3-0.8 m above the road) only over a stretch of road fixed
+// relative to the sensor. And a post every 25 m beside the right-hand rail, from the road up to 1 m.
+std::vector<Eigen::Vector3d> rails_from(double x, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  std::vector<Eigen::Vector3d> pts;
+  auto hit = [&](double along, double side, double height) {
+    pts.emplace_back(along + noise(rng), side + noise(rng), height - 1.8);
+  };
+  for (int ring = 0; ring < 16; ++ring) {
+    const double slope = std::tan((-16.0 + ring) * M_PI / 180.0);
+    for (int k = 1; k < 1800; ++k) {
+      const double azimuth = k * M_PI / 1800.0;  // left of the sensor, then mirrored
+      const double range = 4.0 / std::sin(azimuth);
+      const double height = 1.8 + range * slope;
+      if (range > 60.0) continue;
+      if (height >= 0.3 && height <= 0.8) {
+        hit(range * std::cos(azimuth), 4.0, height);
+        hit(range * std::cos(azimuth), -4.0, height);
+      }
+      for (double post = -50.0; post <= 50.0; post += 25.0) {
+        const double along = post - x;
+        const double post_range = std::hypot(along, 4.05);
+        const double post_height = 1.8 + post_range * slope;
+        if (std::abs(range * std::cos(azimuth) - along) < 0.01 && post_height >= 0.0 && post_height <= 1.0) {
+          hit(along, -4.05, post_height);
+        }
+      }
+    }
+  }
+  return pts;
+}
+
 std::vector<Eigen::Vector3d> selected(const std::vector<Eigen::Vector3d>& points, const std::vector<std::size_t>& idx) {
   std::vector<Eigen::Vector3d> out;
   for (const auto i : idx) out.push_back(points[i]);
@@ -96,6 +130,46 @@ TEST(GridSearch, RingsPullToStandstillButStructureFindsTheMotion) {
   EXPECT_NEAR(search(selected(first, liod::vertical_structure(first, params)),
                      selected(second, liod::vertical_structure(second, params))),
               1.5, 0.03);
+}
+
+TEST(OffAlongTrackLines, DropsARailAlongTheTrackAndKeepsPostsAndCrossingWalls) {
+  std::vector<Eigen::Vector3d> pts;
+  for (double x = 0.0; x < 2.0; x += 0.05) pts.emplace_back(x, 4.0, 0.5);  // rail along x
+  const std::size_t rail = pts.size();
+  for (int k = 0; k < 5; ++k) pts.emplace_back(10.0 + 0.01 * k, 4.0, 0.2 * k);  // a post
+  const std::size_t post = pts.size();
+  for (double y = -1.0; y < 1.0; y += 0.05) pts.emplace_back(20.0, y, 1.0);  // a wall across the road
+  const auto kept = liod::off_along_track_lines(pts, {1.0, 0.0}, liod::AlongTrackLineParams{});
+  std::size_t rails = 0;
+  std::size_t others = 0;
+  for (const auto i : kept) (i < rail ? rails : others)++;
+  EXPECT_EQ(rails, 0U);
+  EXPECT_EQ(others, pts.size() - rail);
+  // Driving along y instead, the wall is the rail.
+  const auto across = liod::off_along_track_lines(pts, {0.0, 1.0}, liod::AlongTrackLineParams{});
+  EXPECT_EQ(across.size(), post);
+}
+
+TEST(GridSearch, RailsSampledByRingsVoteForAStandstillThatTheirLinesDoNot) {
+  // 1.2 m further along in the second view (12 m/s over 0.1 s).
+  const liod::VerticalStructureParams params;
+  auto structure = [&](const std::vector<Eigen::Vector3d>& pts) { return selected(pts, liod::vertical_structure(pts, params)); };
+  const auto first = structure(rails_from(0.0, 1));
+  const auto second = structure(rails_from(1.2, 2));
+  liod::GridSearchParams p;
+  p.min = -1.0;
+  p.max = 5.0;
+  p.coarse_step = 0.05;
+  p.fine_step = 0.01;
+  auto search = [&](const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
+    const liod::FootprintOverlap overlap(a, 0.12);
+    return liod::grid_search([&](double d) { return overlap.score(shifted(b, d)); }, p).value;
+  };
+  EXPECT_NEAR(search(first, second), 0.0, 0.05);
+  auto off_lines = [](const std::vector<Eigen::Vector3d>& pts) {
+    return selected(pts, liod::off_along_track_lines(pts, {1.0, 0.0}, liod::AlongTrackLineParams{}));
+  };
+  EXPECT_NEAR(search(off_lines(first), off_lines(second)), 1.2, 0.03);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -14,8 +15,6 @@
 
 namespace liod::test {
 namespace {
-
-constexpr const char* kSimArguments = "--route urban --seed 1 --duration 25 --max-speed 12";
 
 /// Holds an exclusive lock on a file for its lifetime: one process generates, the others wait.
 class FileLock {
@@ -41,37 +40,35 @@ std::string read_text(const std::filesystem::path& path) {
 }
 
 /// True when `dir` holds a complete drive made by this liod-sim with these arguments.
-bool up_to_date(const std::filesystem::path& dir, const std::filesystem::path& sim) {
+bool up_to_date(const std::filesystem::path& dir, const std::filesystem::path& sim, const std::string& arguments) {
   const auto stamp = dir / "complete";
-  return std::filesystem::exists(stamp) && read_text(stamp) == kSimArguments &&
+  return std::filesystem::exists(stamp) && read_text(stamp) == arguments &&
          std::filesystem::last_write_time(stamp) > std::filesystem::last_write_time(sim);
 }
 
-bool generate(const std::filesystem::path& dir, const std::filesystem::path& sim) {
+bool generate(const std::filesystem::path& dir, const std::filesystem::path& sim, const std::string& arguments) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
-  const std::string cmd = "timeout 600 " + sim.string() + " " + kSimArguments + " --quiet --out " + dir.string() + " > " +
+  const std::string cmd = "timeout 600 " + sim.string() + " " + arguments + " --quiet --out " + dir.string() + " > " +
                           (dir / "sim.log").string() + " 2>&1";
   if (std::system(cmd.c_str()) != 0) return false;
-  std::ofstream(dir / "complete") << kSimArguments;
+  std::ofstream(dir / "complete") << arguments;
   return true;
 }
 
-}  // namespace
-
-const FaultDrive* fault_drive() {
-  static std::unique_ptr<FaultDrive> drive;
-  static bool tried = false;
-  if (tried) return drive.get();
-  tried = true;
+/// The drive liod-sim makes with `arguments`, in test-data/`name`, or null without liod-sim.
+const FaultDrive* simulated_drive(const std::string& name, const std::string& arguments) {
+  static std::map<std::string, std::unique_ptr<FaultDrive>> drives;  // null: tried and failed
+  if (const auto it = drives.find(name); it != drives.end()) return it->second.get();
+  auto& drive = drives[name];
   const std::filesystem::path binary_dir = LIOD_BINARY_DIR;
   const auto sim = binary_dir / "bin" / "liod-sim";
   if (!std::filesystem::exists(sim)) return nullptr;
-  const auto dir = binary_dir / "test-data" / "fault-drive";
+  const auto dir = binary_dir / "test-data" / name;
   std::filesystem::create_directories(dir.parent_path());
   {
-    FileLock lock(dir.parent_path() / "fault-drive.lock");
-    if (!up_to_date(dir, sim) && !generate(dir, sim)) return nullptr;
+    FileLock lock(dir.parent_path() / (name + ".lock"));
+    if (!up_to_date(dir, sim, arguments) && !generate(dir, sim, arguments)) return nullptr;
   }
   auto d = std::make_unique<FaultDrive>();
   d->dir = dir;
@@ -79,6 +76,16 @@ const FaultDrive* fault_drive() {
   d->truth = eval::read_tum((dir / "groundtruth.tum").string());
   drive = std::move(d);
   return drive.get();
+}
+
+}  // namespace
+
+const FaultDrive* fault_drive() {
+  return simulated_drive("fault-drive", "--route urban --seed 1 --duration 25 --max-speed 12");
+}
+
+const FaultDrive* rails_drive() {
+  return simulated_drive("rails-drive", "--route highway --seed 2 --duration 8 --max-speed 12");
 }
 
 }  // namespace liod::test

@@ -23,8 +23,13 @@ struct FaultDrive {
 /// The drive, or null when liod-sim is not built in this tree.
 const FaultDrive* fault_drive();
 
+/// `liod-sim --route highway --seed 2 --duration 8 --max-speed 12`: a rolling start at 12 m/s
+/// between guardrails, with few posts in sight (made like the fault drive, in test-data/rails-drive/).
+const FaultDrive* rails_drive();
+
 }  // namespace liod::test
 
-#define LIOD_REQUIRE_FAULT_DRIVE(var)                                                            \
-  const auto* var = liod::test::fault_drive();                                                   \
+#define LIOD_REQUIRE_DRIVE(var, drive)                                                           \
+  const auto* var = liod::test::drive();                                                         \
   if (var == nullptr) GTEST_SKIP() << "liod-sim not built in " << LIOD_BINARY_DIR << "/bin (build target liod-sim)"
+#define LIOD_REQUIRE_FAULT_DRIVE(var) LIOD_REQUIRE_DRIVE(var, fault_drive)

@@ -27,7 +27,7 @@ enum OdometryStatus : std::uint32_t {
   kStatusKeyframe = 1U << 2,
   kStatusImuGap = 1U << 3,
   kStatusFewFeatures = 1U << 4,
-  kStatusSpeedUnknown = 1U << 5,  // the first scan: attitude and origin only, the speed comes with the next
+  kStatusSpeedUnknown = 1U << 5,  // the first scan: attitude and origin only, the speed comes with later scans
   kStatusImuInconsistent = 1U << 6,  // the LiDAR contradicted the IMU prediction (odometry.max_prediction_nis)
 };
 
@@ -74,7 +74,8 @@ class LidarInertialOdometry {
   double scan_end_time(const Scan& scan) const { return scan.end_time + extrinsics_.lidar_time_offset_s; }
 
   /// Estimates the body state at the scan's end. Returns nullopt while it cannot yet (no IMU
-  /// data around the scan). Points must carry per-point times.
+  /// data around the scan, or a rolling start's speed not found yet: the first scan's result
+  /// has the attitude only). Points must carry per-point times.
   std::optional<OdometryResult> process(const Scan& scan);
 
   /// The gravity vector in the world frame (estimated) that the states are propagated with.
@@ -98,9 +99,15 @@ class LidarInertialOdometry {
     Eigen::Vector3d body;  // IMU frame at that time
   };
   void initialize(const Scan& scan, OdometryResult& result);
-  std::vector<TimedPoint> vertical_structure_points(const Scan& scan) const;
+  struct StructurePoints {
+    std::vector<TimedPoint> all;        // vertical structure (speed_search.hpp), thinned
+    std::vector<TimedPoint> off_lines;  // without the rails and barriers along the road
+  };
+  StructurePoints vertical_structure_points(const Scan& scan) const;
 
-  bool initialize_velocity(const Scan& first, const Scan& second);
+  /// Adds the scan to the speed search; the speed at the first scan once the evidence suffices.
+  std::optional<double> search_speed(const Scan& scan);
+  void start_at_speed(double speed);
   void process_scan(const Scan& scan, OdometryResult& result);
   PoseTable deskew_trajectory(const Scan& scan, const NavState& start, const NavState& predicted_end,
                               const std::vector<ImuInterval>& intervals) const;
@@ -122,7 +129,15 @@ class LidarInertialOdometry {
   std::size_t inconsistent_imu_scans_ = 0;
   bool initialized_ = false;
   bool map_trusted_ = false;
-  std::optional<Scan> first_scan_;  // a rolling start's first scan, until the second gives the speed
+  // A rolling start until the scans' vertical structure tells the speed: the scans' structure
+  // points, and the overlap of consecutive pairs without the rails summed per speed hypothesis.
+  struct SpeedSearch {
+    double first_end_time = 0.0;
+    Scan previous;
+    std::vector<StructurePoints> structure;
+    std::vector<double> evidence;
+  };
+  std::optional<SpeedSearch> speed_search_;
   // The forward accelerometer bias is kept out of the next LiDAR update: at a rolling start, and
   // after a scan that left the along-track position unconstrained (process_scan explains why).
   bool hold_forward_accel_bias_ = false;

@@ -30,6 +30,21 @@ struct VerticalStructureParams {
 std::vector<std::size_t> vertical_structure(const std::vector<Eigen::Vector3d>& points,
                                             const VerticalStructureParams& params);
 
+struct AlongTrackLineParams {
+  double radius_m = 0.5;          // footprint neighbourhood in which a point's line is measured
+  double min_length_std_m = 0.08;  // a post (8 cm) is a dot, a 0.3 m stretch of rail a line
+  double max_width_ratio = 0.1;    // variance across over along: a tree trunk's arc is ~0.2
+  double max_angle_deg = 30.0;     // from the direction of travel
+};
+
+/// Indices of the points (gravity-aligned frame, z up) that do not lie on a line along
+/// `direction` (x, y) in the footprint: rails and barriers beside the road. A ring crosses a
+/// barrier's height band over a stretch fixed in the sensor's frame, so the barrier's footprint
+/// moves with the sensor and scores a standstill best (highway seed 2 at 12 m/s: 974 at 0 m/s
+/// against 961 at the true speed), while telling nothing about the motion along it.
+std::vector<std::size_t> off_along_track_lines(const std::vector<Eigen::Vector3d>& points,
+                                               const Eigen::Vector2d& direction, const AlongTrackLineParams& params);
+
 /// How well a cloud's footprint (x, y of a gravity-aligned frame) lands on a reference footprint:
 /// the sum over the query points of 1 - (d / radius)^2 for the horizontal distance d to the
 /// nearest reference point within radius (a truncated quadratic, so that the score is smooth in
@@ -56,8 +71,15 @@ struct GridSearchParams {
   double fine_step = 0.1;  // around the best coarse hypothesis
 };
 
-/// Maximises score(x) over a coarse grid on [min, max], then over a fine grid around the best
-/// coarse cell. Exhaustive, so that a score with several local maxima (periodic posts) is safe.
+/// The coarse grid's hypotheses: min, min + coarse_step, ... up to max.
+std::vector<double> coarse_grid(const GridSearchParams& params);
+
+/// The best of centre and the fine grid within one coarse step either side of it.
+GridSearchResult refine_around(const std::function<double(double)>& score, double centre, const GridSearchParams& params);
+
+/// Maximises score(x) over the coarse grid on [min, max], then over the fine grid around the
+/// best coarse hypothesis. Exhaustive, so that a score with several local maxima (periodic posts)
+/// is safe.
 GridSearchResult grid_search(const std::function<double(double)>& score, const GridSearchParams& params);
 
 }  // namespace liod
