@@ -30,9 +30,9 @@ constexpr int kConsistentScansToRelease = 50;
 constexpr double kStructureRange_m = 80.0;
 constexpr double kStructureVoxel_m = 0.1;    // thinning of the structure points (3-D)
 constexpr double kFootprintRadius_m = 0.12;  // posts are 8 cm; the fine speed step moves 5 mm per 0.1 s
-constexpr double kMinSpeedScore = 20.0;      // about as many structure points matched, over all pairs
-// Without that much structure for so long (a standstill in the open), the speed is left to the
-// LiDAR's registration under the wide prior.
+constexpr double kMinSpeedScore = 20.0;      // about as many structure points matched (a pair, or all summed)
+// Without that much structure off the rails for so long, the first pair's standstill stands if it
+// saw one, else the speed is left to the LiDAR's registration under the wide prior.
 constexpr double kMaxSpeedSearch_s = 2.0;
 // Below this a pair's best speed may be the rails' standstill (off_along_track_lines).
 constexpr double kStandstillSpeed = 1.0;
@@ -343,13 +343,27 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
     return result;
   }
   if (speed_search_) {
-    if (!(scan_end_time(scan) > scan_end_time(speed_search_->previous))) return std::nullopt;  // clock jump
-    const std::optional<double> speed = search_speed(scan);
-    if (speed || scan_end_time(scan) - speed_search_->first_end_time >= kMaxSpeedSearch_s) {
-      // Known at last (or never: the wide prior, and the LiDAR decides). The state is carried
-      // by the IMU to the scan before this one, which becomes the first keyframe. Not through
-      // all of the scans so far: with the speed this uncertain, their map pulls the speed
-      // towards a standstill scan by scan (highway seed 1, six scans: 14.5 -> 13.3 m/s).
+    const double end = scan_end_time(scan);
+    if (!(end > scan_end_time(speed_search_->previous))) {
+      // The LiDAR's clock stepped back. Only the attitude has been reported: start afresh from
+      // this scan rather than wait (perhaps for hours) for the old time to come round again.
+      speed_search_.reset();
+      initialized_ = false;
+      return process(scan);
+    }
+    // Over an IMU gap the hypotheses' placements would rest on a held sample: decide without it.
+    const bool imu_gap = !imu_gaps(imu_, state_.time, end, config_.imu.max_gap_s).empty();
+    const bool timed_out = end - speed_search_->first_end_time >= kMaxSpeedSearch_s;
+    std::optional<double> speed;
+    if (!imu_gap && !timed_out) speed = search_speed(scan);
+    if (speed || imu_gap || timed_out) {
+      // Known at last, or not to be known: then a first pair that saw a standstill in all of its
+      // structure is taken at its word (a car waiting beside a rail), else the wide prior stays and
+      // the LiDAR decides. The state is carried by the IMU to the scan before this one, which
+      // becomes the first keyframe. Not through all of the scans so far: with the speed this
+      // uncertain, their map pulls the speed towards a standstill scan by scan (highway seed 1,
+      // six scans: 14.5 -> 13.3 m/s).
+      if (!speed && speed_search_->first_pair_standstill) speed = 0.0;
       if (speed) start_at_speed(*speed);
       const Scan previous = std::move(speed_search_->previous);
       speed_search_.reset();
@@ -378,7 +392,7 @@ LidarInertialOdometry::StructurePoints LidarInertialOdometry::vertical_structure
   for (const auto& p : scan.points) {
     const Eigen::Vector3f sensor(p.x, p.y, p.z);
     const double range = sensor.norm();
-    if (range < o.min_range_m || range > kStructureRange_m) continue;
+    if (!(range >= o.min_range_m && range <= kStructureRange_m) || !std::isfinite(p.time)) continue;  // NaN too
     if (crop && crop->contains(sensor)) continue;  // the car's own body moves with it: a standstill
     const Eigen::Vector3d body = lidar_to_imu_ * sensor.cast<double>();
     candidates.push_back({t0 + static_cast<double>(p.time), body});
@@ -410,10 +424,10 @@ std::optional<double> LidarInertialOdometry::search_speed(const Scan& scan) {
   // vertical structure is compared from above (speed_search.hpp explains why not the ground, and
   // why not a local registration).
   SpeedSearch& search = *speed_search_;
-  search.structure.push_back(vertical_structure_points(scan));
   const NavState base = state_;
   const auto intervals = imu_intervals(imu_, base.time, scan_end_time(scan));
   if (intervals.empty()) return std::nullopt;
+  search.structure.push_back(vertical_structure_points(scan));
   auto placed = [](const std::vector<TimedPoint>& points, const PoseTable& world) {
     std::vector<Eigen::Vector3d> out;
     out.reserve(points.size());
@@ -437,11 +451,16 @@ std::optional<double> LidarInertialOdometry::search_speed(const Scan& scan) {
   speeds.coarse_step = 0.5;
   speeds.fine_step = 0.05;
   const std::size_t newest = search.structure.size() - 1;
-  // All the structure: the rails along a road, their posts and ends, tell the speed of a moving
-  // vehicle best (the highway's drives: 1-3 % against up to 10 % without the rails).
-  const GridSearchResult found =
-      grid_search([&](double speed) { return pair_score(speed, newest, &StructurePoints::all); }, speeds);
-  if (found.score >= kMinSpeedScore && std::abs(found.value) >= kStandstillSpeed) return found.value;
+  if (newest == 1) {
+    // All the structure: the rails along a road, their posts and ends, tell the speed of a moving
+    // vehicle best (the highway's drives: 1-3 % against up to 10 % without the rails).
+    const GridSearchResult found =
+        grid_search([&](double speed) { return pair_score(speed, newest, &StructurePoints::all); }, speeds);
+    if (found.score >= kMinSpeedScore) {
+      if (std::abs(found.value) >= kStandstillSpeed) return found.value;
+      search.first_pair_standstill = true;
+    }
+  }
   // A standstill, or not enough to tell: the rails' footprints move with the sensor and vote for
   // a standstill that may not be (off_along_track_lines), so without them, and summed over the
   // pairs until enough structure has passed (one pair on a highway often holds a post or two).

@@ -19,7 +19,7 @@ namespace {
 
 std::uint32_t status_flags(std::uint32_t odometry_status) {
   std::uint32_t f = 0;
-  if (odometry_status & (kStatusInitializing | kStatusSpeedUnknown)) f |= pose::kInitializing;
+  if (odometry_status & kStatusInitializing) f |= pose::kInitializing;
   if (odometry_status & kStatusDegenerate) f |= pose::kDegenerate;
   if (odometry_status & kStatusImuGap) f |= pose::kImuLost;
   if (odometry_status & kStatusKeyframe) f |= pose::kKeyframe;

@@ -150,6 +150,15 @@ TEST(OffAlongTrackLines, DropsARailAlongTheTrackAndKeepsPostsAndCrossingWalls) {
   EXPECT_EQ(across.size(), post);
 }
 
+TEST(OffAlongTrackLines, AGuardrailsOwnPostGoesWithTheRail) {
+  // What the search without the lines gives up (why a pair that finds a moving speed keeps them):
+  // a post 15 cm behind the rail is part of the rail's line in the footprint.
+  std::vector<Eigen::Vector3d> pts;
+  for (double x = -2.0; x < 2.0; x += 0.05) pts.emplace_back(x, 4.0, 0.5);
+  for (int k = 0; k < 5; ++k) pts.emplace_back(0.0, 4.15, 0.2 * k);
+  EXPECT_TRUE(liod::off_along_track_lines(pts, {1.0, 0.0}, liod::AlongTrackLineParams{}).empty());
+}
+
 TEST(GridSearch, RailsSampledByRingsVoteForAStandstillThatTheirLinesDoNot) {
   // 1.2 m further along in the second view (12 m/s over 0.1 s).
   const liod::VerticalStructureParams params;

@@ -133,6 +133,7 @@ class LidarInertialOdometry {
   // points, and the overlap of consecutive pairs without the rails summed per speed hypothesis.
   struct SpeedSearch {
     double first_end_time = 0.0;
+    bool first_pair_standstill = false;  // its best speed with all of the structure, below 1 m/s
     Scan previous;
     std::vector<StructurePoints> structure;
     std::vector<double> evidence;

@@ -1,0 +1,123 @@
+// The start-up of LidarInertialOdometry while the speed is unknown (speed_search.hpp): what it
+// reports, when it decides, and what it does when it cannot. Synthetic scans of a vehicle at rest
+// (level IMU at 200 Hz, 16 rings at 10 Hz over flat ground 1.8 m below the sensor).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <optional>
+#include <vector>
+
+#include "liod/config.hpp"
+#include "liod/lidar_inertial_odometry.hpp"
+
+namespace {
+
+constexpr double kScanPeriod = 0.1;
+constexpr double kSensorHeight = 1.8;
+
+struct Post {
+  double x;
+  double y;
+};
+
+// One sweep starting at `start`, every ring from -15 to 0 deg, 720 azimuths: the ground within
+// 60 m, and the posts (1 m tall) where a ring meets one.
+liod::Scan sweep(double start, const std::vector<Post>& posts, std::uint64_t sequence) {
+  liod::Scan scan;
+  scan.start_time = start;
+  scan.end_time = start + kScanPeriod;
+  scan.sequence = sequence;
+  scan.beam_count = 16;
+  constexpr int kAzimuths = 720;
+  for (int a = 0; a < kAzimuths; ++a) {
+    const double azimuth = 2.0 * M_PI * a / kAzimuths;
+    const float time = static_cast<float>(kScanPeriod * a / kAzimuths);
+    for (int ring = 0; ring < 16; ++ring) {
+      const double slope = std::tan((-15.0 + ring) * M_PI / 180.0);
+      const double ground = slope < 0.0 ? kSensorHeight / -slope : 1e9;
+      double range = ground < 60.0 ? ground : -1.0;
+      for (const auto& post : posts) {
+        const double distance = std::hypot(post.x, post.y);
+        const double bearing = std::atan2(post.y, post.x);
+        const double height = kSensorHeight + distance * slope;
+        const double off = std::remainder(azimuth - bearing, 2.0 * M_PI) * distance;
+        if (std::abs(off) < 0.05 && height >= 0.0 && height <= 1.0 && (range < 0.0 || distance < range)) range = distance;
+      }
+      if (range < 0.0) continue;
+      liod::LidarPoint p;
+      const double horizontal = range;
+      p.x = static_cast<float>(horizontal * std::cos(azimuth));
+      p.y = static_cast<float>(horizontal * std::sin(azimuth));
+      p.z = static_cast<float>(horizontal * slope);
+      p.time = time;
+      p.ring = static_cast<std::uint16_t>(ring);
+      scan.points.push_back(p);
+    }
+  }
+  return scan;
+}
+
+class RollingStart : public ::testing::Test {
+ protected:
+  liod::LidarInertialOdometry odometry{liod::Config{}};
+  double imu_time = 0.0;
+
+  void imu_until(double t) {
+    for (; imu_time <= t + 1e-9; imu_time += 0.005) {
+      liod::ImuSample s;
+      s.time = imu_time;
+      s.accel = Eigen::Vector3d(0.0, 0.0, 9.80665);
+      odometry.add_imu(s);
+    }
+  }
+  std::optional<liod::OdometryResult> scan_at(double start, const std::vector<Post>& posts = {}) {
+    imu_until(start + kScanPeriod + 0.01);
+    return odometry.process(sweep(start, posts, static_cast<std::uint64_t>(start * 10.0 + 0.5)));
+  }
+};
+
+TEST_F(RollingStart, WithoutStructureNoPoseUntilTheSearchGivesUpThenTheWidePrior) {
+  const auto first = scan_at(1.0);
+  ASSERT_TRUE(first.has_value());
+  EXPECT_NE(first->status & liod::kStatusSpeedUnknown, 0U);
+  EXPECT_NE(first->status & liod::kStatusInitializing, 0U);
+  // Flat ground has no vertical structure: no pair can tell the speed, and no pose is reported.
+  int silent = 0;
+  double t = 1.1;
+  std::optional<liod::OdometryResult> decided;
+  for (; t < 4.0 && !decided; t += kScanPeriod) {
+    decided = scan_at(t);
+    if (!decided) ++silent;
+  }
+  ASSERT_TRUE(decided.has_value());
+  EXPECT_GE(silent, 18);  // 2 s of scans after the first
+  EXPECT_LE(silent, 20);
+  EXPECT_NE(decided->status & liod::kStatusInitializing, 0U);
+  EXPECT_EQ(decided->status & liod::kStatusSpeedUnknown, 0U);
+  // The wide prior (odometry.init_velocity_std) stays: the LiDAR is left to find the speed.
+  EXPECT_GT(decided->covariance(6, 6), 10.0);
+  // And scans go on being processed.
+  EXPECT_TRUE(scan_at(t).has_value());
+}
+
+TEST_F(RollingStart, PostsAtRestDecideAStandstillOnTheSecondScan) {
+  const std::vector<Post> posts{{8.0, 4.0}, {-6.0, 5.0}, {12.0, -4.5}, {-10.0, -6.0}, {20.0, 3.0}, {3.0, -9.0}};
+  ASSERT_TRUE(scan_at(1.0, posts).has_value());
+  const auto second = scan_at(1.1, posts);
+  ASSERT_TRUE(second.has_value());
+  EXPECT_NE(second->status & liod::kStatusInitializing, 0U);
+  EXPECT_LT(second->state.velocity.norm(), 0.3);
+  EXPECT_NEAR(second->covariance(6, 6), 0.25, 0.2);  // the search's 0.5 m/s, narrowed by the scan
+}
+
+TEST_F(RollingStart, ALidarClockStepBackDuringTheSearchStartsItAfresh) {
+  ASSERT_TRUE(scan_at(5.0).has_value());
+  EXPECT_FALSE(scan_at(5.1).has_value());
+  EXPECT_FALSE(scan_at(5.2).has_value());
+  // Back to 2 s: not a scan to ignore until 5.2 s comes round again, but a new first scan.
+  const auto restarted = scan_at(2.0);
+  ASSERT_TRUE(restarted.has_value());
+  EXPECT_NE(restarted->status & liod::kStatusSpeedUnknown, 0U);
+}
+
+}  // namespace
