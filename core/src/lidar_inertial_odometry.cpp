@@ -23,6 +23,8 @@ double elapsed_ms(Clock::time_point since) {
 constexpr double kDegToRad = M_PI / 180.0;
 // While the speed is this uncertain, the deskew of the first scans is unreliable (rolling start).
 constexpr double kTrustedVelocityStd = 0.3;
+// The IMU kept at most, back from its newest sample.
+constexpr double kImuHistory_s = 60.0;
 // Scans the IMU must have agreed with the LiDAR (odometry.max_prediction_nis) before a turn releases
 // the forward hold.
 constexpr int kConsistentScansToRelease = 50;
@@ -74,6 +76,7 @@ struct TimeSpan {
 };
 
 // Where the IMU is silent within [from, to]: between consecutive samples more than max_gap apart,
+// before the first sample when it begins more than max_gap after `from` (the buffer keeps a minute),
 // and after the last sample when it ends more than max_gap before `to`.
 std::vector<TimeSpan> imu_gaps(const std::deque<ImuSample>& imu, double from, double to, double max_gap) {
   std::vector<TimeSpan> gaps;
@@ -82,6 +85,7 @@ std::vector<TimeSpan> imu_gaps(const std::deque<ImuSample>& imu, double from, do
     b = std::min(b, to);
     if (b > a) gaps.push_back({a, b});
   };
+  if (imu.front().time - from > max_gap) add(from, imu.front().time);
   for (std::size_t i = 1; i < imu.size(); ++i) {
     if (imu[i].time - imu[i - 1].time > max_gap) add(imu[i - 1].time, imu[i].time);
   }
@@ -220,6 +224,10 @@ void LidarInertialOdometry::add_imu(const ImuSample& sample) {
     return;
   }
   imu_.push_back(sample);
+  // Without scans (a LiDAR dead or not yet connected) nothing else trims the buffer, and a daemon
+  // left so for a day would hold a gigabyte of samples. A scan after a longer silence is
+  // predicted across the missing start as over any IMU gap.
+  while (imu_.size() > 2 && imu_.front().time < sample.time - kImuHistory_s) imu_.pop_front();
 }
 
 double LidarInertialOdometry::latest_imu_time() const {

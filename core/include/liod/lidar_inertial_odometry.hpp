@@ -85,6 +85,8 @@ class LidarInertialOdometry {
   const std::deque<Keyframe>& keyframes() const { return keyframes_; }
   const LocalMap& plane_map() const { return plane_map_; }
   std::size_t dropped_imu_samples() const { return dropped_imu_; }
+  /// IMU samples held for the coming scans (at most a minute's).
+  std::size_t buffered_imu_samples() const { return imu_.size(); }
   /// Scans whose IMU prediction the LiDAR contradicted beyond odometry.max_prediction_nis.
   std::size_t inconsistent_imu_scans() const { return inconsistent_imu_scans_; }
 

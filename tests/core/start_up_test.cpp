@@ -1,6 +1,7 @@
-// The start-up of LidarInertialOdometry while the speed is unknown (speed_search.hpp): what it
-// reports, when it decides, and what it does when it cannot. Synthetic scans of a vehicle at rest
-// (level IMU at 200 Hz, 16 rings at 10 Hz over flat ground 1.8 m below the sensor).
+// The start-up of LidarInertialOdometry: what it reports while the speed is unknown
+// (speed_search.hpp), when it decides, what it does when it cannot, and what it keeps while no
+// scan comes. Synthetic scans of a vehicle at rest (level IMU at 200 Hz, 16 rings at 10 Hz over
+// flat ground 1.8 m below the sensor).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -57,7 +58,7 @@ liod::Scan sweep(double start, const std::vector<Post>& posts, std::uint64_t seq
   return scan;
 }
 
-class RollingStart : public ::testing::Test {
+class StartUp : public ::testing::Test {
  protected:
   liod::LidarInertialOdometry odometry{liod::Config{}};
   double imu_time = 0.0;
@@ -76,7 +77,7 @@ class RollingStart : public ::testing::Test {
   }
 };
 
-TEST_F(RollingStart, WithoutStructureNoPoseUntilTheSearchGivesUpThenTheWidePrior) {
+TEST_F(StartUp, WithoutStructureNoPoseUntilTheSearchGivesUpThenTheWidePrior) {
   const auto first = scan_at(1.0);
   ASSERT_TRUE(first.has_value());
   EXPECT_NE(first->status & liod::kStatusSpeedUnknown, 0U);
@@ -100,7 +101,7 @@ TEST_F(RollingStart, WithoutStructureNoPoseUntilTheSearchGivesUpThenTheWidePrior
   EXPECT_TRUE(scan_at(t).has_value());
 }
 
-TEST_F(RollingStart, PostsAtRestDecideAStandstillOnTheSecondScan) {
+TEST_F(StartUp, PostsAtRestDecideAStandstillOnTheSecondScan) {
   const std::vector<Post> posts{{8.0, 4.0}, {-6.0, 5.0}, {12.0, -4.5}, {-10.0, -6.0}, {20.0, 3.0}, {3.0, -9.0}};
   ASSERT_TRUE(scan_at(1.0, posts).has_value());
   const auto second = scan_at(1.1, posts);
@@ -110,7 +111,7 @@ TEST_F(RollingStart, PostsAtRestDecideAStandstillOnTheSecondScan) {
   EXPECT_NEAR(second->covariance(6, 6), 0.25, 0.2);  // the search's 0.5 m/s, narrowed by the scan
 }
 
-TEST_F(RollingStart, ALidarClockStepBackDuringTheSearchStartsItAfresh) {
+TEST_F(StartUp, ALidarClockStepBackDuringTheSearchStartsItAfresh) {
   ASSERT_TRUE(scan_at(5.0).has_value());
   EXPECT_FALSE(scan_at(5.1).has_value());
   EXPECT_FALSE(scan_at(5.2).has_value());
@@ -118,6 +119,28 @@ TEST_F(RollingStart, ALidarClockStepBackDuringTheSearchStartsItAfresh) {
   const auto restarted = scan_at(2.0);
   ASSERT_TRUE(restarted.has_value());
   EXPECT_NE(restarted->status & liod::kStatusSpeedUnknown, 0U);
+}
+
+TEST_F(StartUp, AnImuWithoutScansIsNotKeptForever) {
+  // A LiDAR that never comes: ten minutes of IMU at 200 Hz, and the buffer holds one minute.
+  imu_until(600.0);
+  EXPECT_LE(odometry.buffered_imu_samples(), 60U * 200U + 2U);
+  EXPECT_GE(odometry.buffered_imu_samples(), 60U * 200U - 2U);
+  // When it comes, it starts as ever (attitude from the last second's IMU).
+  const auto first = scan_at(600.0);
+  ASSERT_TRUE(first.has_value());
+  EXPECT_NE(first->status & liod::kStatusSpeedUnknown, 0U);
+}
+
+TEST_F(StartUp, AScanAfterMoreThanTheImuKeptIsFlaggedAsAcrossAnImuGap) {
+  const std::vector<Post> posts{{8.0, 4.0}, {-6.0, 5.0}, {12.0, -4.5}, {-10.0, -6.0}, {20.0, 3.0}, {3.0, -9.0}};
+  ASSERT_TRUE(scan_at(1.0, posts).has_value());
+  ASSERT_TRUE(scan_at(1.1, posts).has_value());
+  // The LiDAR silent for 100 s: the IMU from 1.2 s to 41 s is gone when the next scan comes.
+  const auto after = scan_at(101.2, posts);
+  ASSERT_TRUE(after.has_value());
+  EXPECT_NE(after->status & liod::kStatusImuGap, 0U);
+  EXPECT_TRUE(after->state.position.allFinite());
 }
 
 }  // namespace
