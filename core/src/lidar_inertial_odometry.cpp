@@ -447,9 +447,9 @@ std::optional<double> LidarInertialOdometry::search_speed(const Scan& scan) {
     start.velocity = base.rotation * (speed * config_.odometry.forward_axis);
     return start;
   };
-  // The overlap of scan k with scan k - 1 under a speed hypothesis.
-  auto pair_score = [&](double speed, std::size_t k, std::vector<TimedPoint> StructurePoints::*points) {
-    const PoseTable world = integrate_imu_poses(start_at(speed), intervals, base.gravity);
+  auto placement = [&](double speed) { return integrate_imu_poses(start_at(speed), intervals, base.gravity); };
+  // The overlap of scan k with scan k - 1 placed by one hypothesis's poses.
+  auto pair_score = [&](const PoseTable& world, std::size_t k, std::vector<TimedPoint> StructurePoints::*points) {
     return FootprintOverlap(placed(search.structure[k - 1].*points, world), kFootprintRadius_m)
         .score(placed(search.structure[k].*points, world));
   };
@@ -463,7 +463,7 @@ std::optional<double> LidarInertialOdometry::search_speed(const Scan& scan) {
     // All the structure: the rails along a road, their posts and ends, tell the speed of a moving
     // vehicle best (the highway's drives: 1-3 % against up to 10 % without the rails).
     const GridSearchResult found =
-        grid_search([&](double speed) { return pair_score(speed, newest, &StructurePoints::all); }, speeds);
+        grid_search([&](double speed) { return pair_score(placement(speed), newest, &StructurePoints::all); }, speeds);
     if (found.score >= kMinSpeedScore) {
       if (std::abs(found.value) >= kStandstillSpeed) return found.value;
       search.first_pair_standstill = true;
@@ -475,15 +475,16 @@ std::optional<double> LidarInertialOdometry::search_speed(const Scan& scan) {
   const std::vector<double> hypotheses = coarse_grid(speeds);
   search.evidence.resize(hypotheses.size(), 0.0);
   for (std::size_t i = 0; i < hypotheses.size(); ++i) {
-    search.evidence[i] += pair_score(hypotheses[i], newest, &StructurePoints::off_lines);
+    search.evidence[i] += pair_score(placement(hypotheses[i]), newest, &StructurePoints::off_lines);
   }
   const auto best = std::max_element(search.evidence.begin(), search.evidence.end());
   if (*best < kMinSpeedScore) return std::nullopt;
   const double centre = hypotheses[static_cast<std::size_t>(best - search.evidence.begin())];
   return refine_around(
              [&](double speed) {
+               const PoseTable world = placement(speed);  // once for all the pairs
                double sum = 0.0;
-               for (std::size_t k = 1; k <= newest; ++k) sum += pair_score(speed, k, &StructurePoints::off_lines);
+               for (std::size_t k = 1; k <= newest; ++k) sum += pair_score(world, k, &StructurePoints::off_lines);
                return sum;
              },
              centre, speeds)

@@ -74,6 +74,17 @@ std::vector<Eigen::Vector3d> shifted(std::vector<Eigen::Vector3d> points, double
   return points;
 }
 
+// The displacement along x (-1 to 5 m, 1 cm resolution) under which b's footprint lands best on a's.
+double best_displacement(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
+  liod::GridSearchParams p;
+  p.min = -1.0;
+  p.max = 5.0;
+  p.coarse_step = 0.05;
+  p.fine_step = 0.01;
+  const liod::FootprintOverlap overlap(a, 0.12);
+  return liod::grid_search([&](double d) { return overlap.score(shifted(b, d)); }, p).value;
+}
+
 TEST(VerticalStructure, KeepsPostsAndDropsFlatGround) {
   std::vector<Eigen::Vector3d> pts;
   for (double x = 0.0; x < 10.0; x += 0.1) {
@@ -114,20 +125,11 @@ TEST(GridSearch, RingsPullToStandstillButStructureFindsTheMotion) {
   // The second view is 1.5 m further along (15 m/s over 0.1 s). Hypotheses: the displacement.
   const auto first = sparse_road_from(0.0, 1);
   const auto second = sparse_road_from(1.5, 2);
-  liod::GridSearchParams p;
-  p.min = -1.0;
-  p.max = 5.0;
-  p.coarse_step = 0.05;
-  p.fine_step = 0.01;
-  auto search = [&](const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
-    const liod::FootprintOverlap overlap(a, 0.12);
-    return liod::grid_search([&](double d) { return overlap.score(shifted(b, d)); }, p).value;
-  };
   // All points: the rings, identical in both views, win at zero motion.
-  EXPECT_NEAR(search(first, second), 0.0, 0.05);
+  EXPECT_NEAR(best_displacement(first, second), 0.0, 0.05);
   // Vertical structure only: the posts decide.
   const liod::VerticalStructureParams params;
-  EXPECT_NEAR(search(selected(first, liod::vertical_structure(first, params)),
+  EXPECT_NEAR(best_displacement(selected(first, liod::vertical_structure(first, params)),
                      selected(second, liod::vertical_structure(second, params))),
               1.5, 0.03);
 }
@@ -165,20 +167,11 @@ TEST(GridSearch, RailsSampledByRingsVoteForAStandstillThatTheirLinesDoNot) {
   auto structure = [&](const std::vector<Eigen::Vector3d>& pts) { return selected(pts, liod::vertical_structure(pts, params)); };
   const auto first = structure(rails_from(0.0, 1));
   const auto second = structure(rails_from(1.2, 2));
-  liod::GridSearchParams p;
-  p.min = -1.0;
-  p.max = 5.0;
-  p.coarse_step = 0.05;
-  p.fine_step = 0.01;
-  auto search = [&](const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
-    const liod::FootprintOverlap overlap(a, 0.12);
-    return liod::grid_search([&](double d) { return overlap.score(shifted(b, d)); }, p).value;
-  };
-  EXPECT_NEAR(search(first, second), 0.0, 0.05);
+  EXPECT_NEAR(best_displacement(first, second), 0.0, 0.05);
   auto off_lines = [](const std::vector<Eigen::Vector3d>& pts) {
     return selected(pts, liod::off_along_track_lines(pts, {1.0, 0.0}, liod::AlongTrackLineParams{}));
   };
-  EXPECT_NEAR(search(off_lines(first), off_lines(second)), 1.2, 0.03);
+  EXPECT_NEAR(best_displacement(off_lines(first), off_lines(second)), 1.2, 0.03);
 }
 
 }  // namespace
