@@ -130,7 +130,11 @@ UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior
     if (!edge_map.empty()) {
       std::optional<Eigen::Vector3d> sensor;
       if (params.edge_viewpoint_body) sensor = x.rotation * *params.edge_viewpoint_body + x.position;
+      const Eigen::Vector3d up = -x.gravity.normalized();
       auto line = [&](LocalMap::NeighbourSearch& ns, const Eigen::Vector3d& q, const CorrespondenceParams& p) {
+        if (sensor && params.posts) {
+          if (auto post = post_correspondence(ns, q, up, *sensor, *params.posts)) return post;
+        }
         return line_correspondence(ns, q, p, sensor ? &*sensor : nullptr);
       };
       accumulate(edges_body, x, edges_world, edge_map, params, line, search, edge_cache, eq);

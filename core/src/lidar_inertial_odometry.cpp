@@ -210,6 +210,7 @@ LidarInertialOdometry::LidarInertialOdometry(const Config& config)
   update_params_.correspondence.fit_uncertainty = config.odometry.fit_uncertainty;
   if (config.odometry.edge_residual == EdgeResidual::kAlongRay) {
     update_params_.edge_viewpoint_body = config.extrinsics.lidar_to_imu_translation;
+    if (config.odometry.post_edges) update_params_.posts = PostParams{};
   }
   update_params_.degeneracy_eigenvalue = config.odometry.degeneracy_eigenvalue;
   update_params_.project_degenerate = config.odometry.degeneracy_projection;

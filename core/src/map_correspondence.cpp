@@ -1,7 +1,9 @@
 #include "liod/map_correspondence.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <array>
+#include <limits>
 
 namespace liod {
 namespace {
@@ -74,6 +76,34 @@ std::optional<LinearResidual> plane_correspondence(LocalMap::NeighbourSearch& ma
     variance_scale += along * along / (n * ev(axis));
   }
   return LinearResidual{normal, offset, variance_scale};
+}
+
+std::optional<LinearResidual> post_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
+                                                  const Eigen::Vector3d& up, const Eigen::Vector3d& viewpoint,
+                                                  const PostParams& params) {
+  std::array<Eigen::Vector3d, LocalMap::kMaxNeighbours> points;
+  const int n = map.nearest(query, std::clamp(params.neighbours, 2, LocalMap::kMaxNeighbours), params.radius_m, points);
+  if (n < params.neighbours) return std::nullopt;
+  const Eigen::Matrix3d across_up = Eigen::Matrix3d::Identity() - up * up.transpose();
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  double lowest = std::numeric_limits<double>::infinity();
+  double highest = -std::numeric_limits<double>::infinity();
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d& p = points[static_cast<std::size_t>(i)];
+    centroid += p;
+    lowest = std::min(lowest, up.dot(p));
+    highest = std::max(highest, up.dot(p));
+    for (int j = 0; j < i; ++j) {
+      if ((across_up * (p - points[static_cast<std::size_t>(j)])).norm() > params.max_width_m) return std::nullopt;
+    }
+  }
+  if (highest - lowest < params.min_height_m) return std::nullopt;
+  centroid /= n;
+  Eigen::Vector3d normal = across_up * (query - viewpoint);
+  if (normal.norm() < 1e-6) return std::nullopt;  // looking straight down the post
+  normal.normalize();
+  // The post's axis is known to its points' scatter over n (as a plane's offset).
+  return LinearResidual{normal, -normal.dot(centroid), 1.0 + 1.0 / n};
 }
 
 std::optional<LinearResidual> line_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 
 #include "liod/curvature_features.hpp"
@@ -89,6 +91,61 @@ TEST(CurvatureFeatures, OccludedFarSideIsExcluded) {
   extractor.extract(scan, features);
   for (auto i : features.edges) EXPECT_TRUE(i >= 100 && i < 110) << "edge at wall index " << i;
   for (auto i : features.planes) EXPECT_TRUE(i < 95 || i >= 115) << "plane next to the occlusion at " << i;
+}
+
+// One beam 12.9 deg below the horizon, 1.83 m above a flat road, sweeping past a guard-rail post
+// (16 cm square, 4.35 m to the right, 4.7 m ahead): the beam meets the post 0.34 m above the road
+// at 6.5 m, the ground beside it at 7.95 m. A post below a rail stands out from the ground behind
+// it by only 1-1.5 m.
+liod::Scan post_before_the_ground_scan() {
+  liod::Scan scan;
+  scan.beam_count = 1;
+  const double down = std::tan(12.9 * M_PI / 180.0);
+  const double ground = 1.83 / down;
+  for (int i = 0; i < 400; ++i) {
+    const double az = (-60.1 + 0.2 * i) * M_PI / 180.0;
+    const Eigen::Vector2d dir(std::cos(az), std::sin(az));
+    double reach = ground;
+    // The ray's entry into the post's square [5.5, 5.66] x [-4.43, -4.27] (slab test).
+    double enter = 0.0;
+    double leave = 1e9;
+    const Eigen::Vector2d lo(4.65, -4.43);
+    const Eigen::Vector2d hi(4.81, -4.27);
+    for (int a = 0; a < 2; ++a) {
+      const double t0 = lo(a) / dir(a);
+      const double t1 = hi(a) / dir(a);
+      enter = std::max(enter, std::min(t0, t1));
+      leave = std::min(leave, std::max(t0, t1));
+    }
+    if (enter <= leave && enter < reach) reach = enter;
+    liod::LidarPoint p;
+    p.x = static_cast<float>(reach * dir.x());
+    p.y = static_cast<float>(reach * dir.y());
+    p.z = static_cast<float>(-reach * down);
+    p.time = static_cast<float>(i * 55.56e-6);
+    scan.points.push_back(p);
+  }
+  return scan;
+}
+
+TEST(CurvatureFeatures, ALowPostBeforeTheGroundIsAnEdge) {
+  const liod::Scan scan = post_before_the_ground_scan();
+  int on_post = 0;
+  for (const auto& p : scan.points) on_post += std::hypot(p.x, p.y) < 7.5F ? 1 : 0;
+  ASSERT_GE(on_post, 3);
+  liod::FeatureParams params;  // the defaults
+  params.sectors_per_ring = 1;
+  liod::FeatureExtractor extractor(params);
+  liod::ScanFeatures features;
+  extractor.extract(scan, features);
+  int post_edges = 0;
+  for (auto i : features.edges) post_edges += std::hypot(scan.points[i].x, scan.points[i].y) < 7.5F ? 1 : 0;
+  EXPECT_GE(post_edges, 1);
+  // LOAM's usual threshold does not see it: the post's sharpest points have a curvature of 0.12.
+  params.edge_curvature = 0.2;
+  liod::FeatureExtractor strict(params);
+  strict.extract(scan, features);
+  for (auto i : features.edges) EXPECT_GT(std::hypot(scan.points[i].x, scan.points[i].y), 7.5F);
 }
 
 }  // namespace

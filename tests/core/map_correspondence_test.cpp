@@ -3,6 +3,8 @@
 #include <cmath>
 #include <random>
 
+#include <Eigen/Geometry>
+
 #include "liod/map_correspondence.hpp"
 
 namespace {
@@ -99,6 +101,65 @@ TEST(MapCorrespondence, AlongTheRayOnlyTheRangeCounts) {
   EXPECT_LT(std::abs(ray_across->evaluate(across)), 0.002);
   EXPECT_NEAR(ray_behind->evaluate(behind), 0.05, 0.002);
   EXPECT_NEAR(ray_behind->normal.dot(Eigen::Vector3d::UnitX()), 1.0, 1e-3);
+}
+
+// A guard-rail post below its rail, as the edge map keeps it: two points one above the other (the
+// map's 0.2 m spacing), and the rail's top edge 0.5 m above them, a horizontal line. Too few for
+// a fitted line; as a post, an edge point on it gives its range error along the ray.
+liod::LocalMap rail_with_post() {
+  liod::LocalMap map(1.0, liod::LocalMap::kMaxPointsPerVoxel, 0.0);
+  std::vector<Eigen::Vector3d> points{{5.52, -4.30, 0.10}, {5.56, -4.32, 0.32}};
+  for (int i = 0; i < 10; ++i) points.emplace_back(4.0 + 0.3 * i, -4.15, 0.80);
+  map.add(points, 0);
+  return map;
+}
+
+TEST(MapCorrespondence, TwoPointsOfAShortPostGiveItsRangeAlongTheRay) {
+  const liod::LocalMap map = rail_with_post();
+  liod::LocalMap::NeighbourSearch search(map);
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d sensor(0.0, 0.0, 1.83);
+  const liod::PostParams posts;
+  liod::CorrespondenceParams lines;
+  lines.neighbours = 8;
+  lines.max_distance_m = 1.0;
+  // On the post's axis, 5 cm beyond it along the ray, and 5 cm beside it across the ray.
+  const Eigen::Vector3d axis(5.54, -4.31, 0.2);
+  const Eigen::Vector3d ray = Eigen::Vector3d(axis.x() - sensor.x(), axis.y() - sensor.y(), 0.0).normalized();
+  const Eigen::Vector3d beyond = axis + 0.05 * ray;
+  const Eigen::Vector3d beside = axis + 0.05 * up.cross(ray);
+  EXPECT_FALSE(liod::line_correspondence(search, beyond, lines, &sensor)) << "the post is no fitted line";
+  const auto on_axis = liod::post_correspondence(search, axis, up, sensor, posts);
+  const auto far = liod::post_correspondence(search, beyond, up, sensor, posts);
+  const auto across = liod::post_correspondence(search, beside, up, sensor, posts);
+  ASSERT_TRUE(on_axis && far && across);
+  EXPECT_NEAR(on_axis->evaluate(axis), 0.0, 1e-3);
+  EXPECT_NEAR(far->evaluate(beyond), 0.05, 1e-3);
+  EXPECT_NEAR(std::abs(across->evaluate(beside)), 0.0, 2e-3);
+  EXPECT_NEAR(far->normal.dot(up), 0.0, 1e-12);  // a range error in the horizontal only
+  EXPECT_NEAR(far->normal.dot(ray), 1.0, 1e-9);
+}
+
+TEST(MapCorrespondence, HorizontalEdgesAndScatteredPointsAreNoPost) {
+  const liod::LocalMap map = rail_with_post();
+  liod::LocalMap::NeighbourSearch search(map);
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d sensor(0.0, 0.0, 1.83);
+  const liod::PostParams posts;
+  // On the rail's top edge: its nearest points lie side by side, not one above the other.
+  EXPECT_FALSE(liod::post_correspondence(search, {6.7, -4.15, 0.80}, up, sensor, posts));
+  // Two points 0.3 m apart across the vertical: no post between them.
+  liod::LocalMap wide(1.0, liod::LocalMap::kMaxPointsPerVoxel, 0.0);
+  wide.add({{2.5, 2.5, 0.3}, {2.8, 2.5, 0.5}}, 0);
+  liod::LocalMap::NeighbourSearch wide_search(wide);
+  EXPECT_FALSE(liod::post_correspondence(wide_search, {2.65, 2.5, 0.4}, up, sensor, posts));
+  // A single point: nothing to tell a post from a speck.
+  liod::LocalMap single(1.0, liod::LocalMap::kMaxPointsPerVoxel, 0.0);
+  single.add({{2.5, 2.5, 0.3}}, 0);
+  liod::LocalMap::NeighbourSearch single_search(single);
+  EXPECT_FALSE(liod::post_correspondence(single_search, {2.5, 2.5, 0.35}, up, sensor, posts));
+  // The same two post points seen with the world tilted 90 deg (up along x) lie side by side.
+  EXPECT_FALSE(liod::post_correspondence(search, {5.54, -4.31, 0.2}, Eigen::Vector3d::UnitX(), sensor, posts));
 }
 
 }  // namespace

@@ -71,7 +71,7 @@ struct OdometryConfig {
   /// bumps do a little). Ties the pitch to the direction of travel. 0: constraint off.
   double vertical_velocity_std_mps = 0.05;
   double occlusion_jump_m = 0.5;     // neighbour range jump that marks an occlusion edge (scaled by range)
-  double edge_curvature = 0.2;       // c above this: edge candidate
+  double edge_curvature = 0.1;       // c above this: edge candidate
   double plane_curvature = 0.05;     // c below this: planar candidate
   int sectors_per_ring = 8;
   int max_edges_per_sector = 6;
@@ -89,6 +89,7 @@ struct OdometryConfig {
   double plane_thickness_m = 0.03;       // every neighbour within this of its fitted plane
   bool fit_uncertainty = true;           // a residual's variance includes its fitted plane's / line's uncertainty
   EdgeResidual edge_residual = EdgeResidual::kAlongRay;
+  bool post_edges = true;  // along_ray only: edges on posts (map points one above the other) match the post's axis
   double keyframe_distance_m = 1.0;
   double keyframe_angle_deg = 10.0;
   double hausdorff_threshold_m = 0.6; // h1

@@ -42,7 +42,7 @@ struct FeatureParams {
   double min_range_m = 2.0;
   double max_range_m = 120.0;
   double occlusion_jump_m = 0.5;  // at 10 m; scaled with range
-  double edge_curvature = 0.2;
+  double edge_curvature = 0.1;
   double plane_curvature = 0.05;
   int sectors_per_ring = 8;
   int max_edges_per_sector = 6;

@@ -35,6 +35,9 @@ struct UpdateParams {
   /// The LiDAR's origin in the body frame: edge residuals are then measured along the ray from it
   /// (line_correspondence's viewpoint). None: point-to-line distance.
   std::optional<Eigen::Vector3d> edge_viewpoint_body;
+  /// With a viewpoint: an edge point whose nearest map edge points form a post is matched to the
+  /// post's vertical axis (post_correspondence) before a fitted line is tried.
+  std::optional<PostParams> posts;
 };
 
 struct UpdateResult {

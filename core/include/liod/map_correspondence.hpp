@@ -32,6 +32,25 @@ std::optional<LinearResidual> plane_correspondence(LocalMap::NeighbourSearch& ma
                                                    const CorrespondenceParams& params);
 /// With a viewpoint (the LiDAR's origin, world frame) the distance to the line is measured along
 /// the ray from it, else the shortest way (LOAM).
+/// A roadside post, a pole's foot, a wall's corner: an edge whose map points stand one above the
+/// other. The map keeps a post 16 cm wide and 0.4 m tall (a guard rail's, below the rail) as two or
+/// three points, too few for a fitted line, yet on a highway such posts are the only structure
+/// along the track.
+struct PostParams {
+  int neighbours = 2;             // nearest map edge points that must stand on one vertical line
+  double radius_m = 0.4;          // ...within this of the query
+  double max_width_m = 0.2;       // their horizontal spread (largest distance between them, across up)
+  double min_height_m = 0.1;      // their vertical extent at least (a horizontal edge has none)
+};
+
+/// The vertical line through the query's nearest map edge points if they form a post (PostParams);
+/// its residual is the query's distance to that line along the horizontal part of the ray from the
+/// viewpoint (the LiDAR's origin, world frame): the range to the post, which does not depend on
+/// where across the post the beam grazed it. up: the world's up direction (against gravity).
+std::optional<LinearResidual> post_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
+                                                  const Eigen::Vector3d& up, const Eigen::Vector3d& viewpoint,
+                                                  const PostParams& params);
+
 std::optional<LinearResidual> line_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
                                                   const CorrespondenceParams& params,
                                                   const Eigen::Vector3d* viewpoint = nullptr);
