@@ -30,8 +30,7 @@ struct CorrespondenceParams {
 
 std::optional<LinearResidual> plane_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
                                                    const CorrespondenceParams& params);
-/// With a viewpoint (the LiDAR's origin, world frame) the distance to the line is measured along
-/// the ray from it, else the shortest way (LOAM).
+
 /// A roadside post, a pole's foot, a wall's corner: an edge whose map points stand one above the
 /// other. The map keeps a post 16 cm wide and 0.4 m tall (a guard rail's, below the rail) as two or
 /// three points, too few for a fitted line, yet on a highway such posts are the only structure
@@ -51,6 +50,8 @@ std::optional<LinearResidual> post_correspondence(LocalMap::NeighbourSearch& map
                                                   const Eigen::Vector3d& up, const Eigen::Vector3d& viewpoint,
                                                   const PostParams& params);
 
+/// With a viewpoint (the LiDAR's origin, world frame) the distance to the line is measured along
+/// the ray from it, else the shortest way (LOAM).
 std::optional<LinearResidual> line_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
                                                   const CorrespondenceParams& params,
                                                   const Eigen::Vector3d* viewpoint = nullptr);
