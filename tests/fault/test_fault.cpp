@@ -324,8 +324,9 @@ TEST(FaultInjection, StartWhileMovingBesideRails) {
             << moving.front().time - drive->at(0.0) << " s, path " << estimated << " m estimated, " << travelled
             << " m true" << std::endl;
   EXPECT_GT(travelled, 60.0);
-  // The speed is found to a few per cent, and the guard rail's posts hold it from then on (without
-  // them, odometry.post_edges, the first maps' ground rings pulled it down: 75.9 m for 88.7 m).
+  // The speed is found to a few per cent, and the guard rail's posts hold it from then on (before
+  // they were matched, odometry.post_edges, the first maps' ground rings pulled it down: 75.9 m
+  // for 88.7 m).
   EXPECT_NEAR(estimated, travelled, 0.03 * travelled);
   EXPECT_LT(moving.front().time, drive->at(1.0));  // found within the first second
 }
