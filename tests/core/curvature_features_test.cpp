@@ -106,7 +106,7 @@ liod::Scan post_before_the_ground_scan() {
     const double az = (-60.1 + 0.2 * i) * M_PI / 180.0;
     const Eigen::Vector2d dir(std::cos(az), std::sin(az));
     double reach = ground;
-    // The ray's entry into the post's square [5.5, 5.66] x [-4.43, -4.27] (slab test).
+    // The ray's entry into the post's square [4.65, 4.81] x [-4.43, -4.27] (slab test).
     double enter = 0.0;
     double leave = 1e9;
     const Eigen::Vector2d lo(4.65, -4.43);
