@@ -43,6 +43,15 @@ bool find_neighbourhood(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& q
   return true;
 }
 
+// An edge residual's normal when it is measured along the ray from the viewpoint: the ray's part
+// across the edge's axis (across = I - axis axis^T), unit length; none for a ray along the axis.
+std::optional<Eigen::Vector3d> across_ray(const Eigen::Matrix3d& across, const Eigen::Vector3d& query,
+                                          const Eigen::Vector3d& viewpoint) {
+  const Eigen::Vector3d normal = across * (query - viewpoint);
+  if (normal.norm() < 1e-6) return std::nullopt;
+  return normal.normalized();
+}
+
 }  // namespace
 
 std::optional<LinearResidual> plane_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
@@ -82,8 +91,9 @@ std::optional<LinearResidual> post_correspondence(LocalMap::NeighbourSearch& map
                                                   const Eigen::Vector3d& up, const Eigen::Vector3d& viewpoint,
                                                   const PostParams& params) {
   std::array<Eigen::Vector3d, LocalMap::kMaxNeighbours> points;
-  const int n = map.nearest(query, std::clamp(params.neighbours, 2, LocalMap::kMaxNeighbours), params.radius_m, points);
-  if (n < params.neighbours) return std::nullopt;
+  const int wanted = std::clamp(params.neighbours, 2, LocalMap::kMaxNeighbours);
+  const int n = map.nearest(query, wanted, params.radius_m, points);
+  if (n < wanted) return std::nullopt;
   const Eigen::Matrix3d across_up = Eigen::Matrix3d::Identity() - up * up.transpose();
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   double lowest = std::numeric_limits<double>::infinity();
@@ -99,11 +109,10 @@ std::optional<LinearResidual> post_correspondence(LocalMap::NeighbourSearch& map
   }
   if (highest - lowest < params.min_height_m) return std::nullopt;
   centroid /= n;
-  Eigen::Vector3d normal = across_up * (query - viewpoint);
-  if (normal.norm() < 1e-6) return std::nullopt;  // looking straight down the post
-  normal.normalize();
+  const auto normal = across_ray(across_up, query, viewpoint);
+  if (!normal) return std::nullopt;  // looking straight down the post
   // The post's axis is known to its points' scatter over n (as a plane's offset).
-  return LinearResidual{normal, -normal.dot(centroid), 1.0 + 1.0 / n};
+  return LinearResidual{*normal, -normal->dot(centroid), 1.0 + 1.0 / n};
 }
 
 std::optional<LinearResidual> line_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
@@ -124,13 +133,14 @@ std::optional<LinearResidual> line_correspondence(LocalMap::NeighbourSearch& map
     // (seed 1, map from true poses) the point-to-line residuals of its roadside posts asked for a
     // step of -6.3 cm along the track on average, the silhouettes seen from the keyframes behind;
     // along the ray -3.5 cm.
-    normal = across * (query - *viewpoint);
-    if (normal.norm() < 1e-6) return std::nullopt;  // a ray along the line: no range to it
+    const auto along_ray = across_ray(across, query, *viewpoint);
+    if (!along_ray) return std::nullopt;  // a ray along the line: no range to it
+    normal = *along_ray;
   } else {
     normal = across * (query - m.mean);
     if (normal.norm() < 1e-6) return LinearResidual{Eigen::Vector3d::Zero(), 0.0};
+    normal.normalize();
   }
-  normal.normalize();
   if (!params.fit_uncertainty) return LinearResidual{normal, -normal.dot(m.mean)};
   // As for planes: the line's offset and direction are uncertain, the latter over the query's
   // distance along the line from the neighbours' centroid.

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 #include <random>
 
 #include <Eigen/Geometry>
@@ -106,20 +107,30 @@ TEST(MapCorrespondence, AlongTheRayOnlyTheRangeCounts) {
 // A guard-rail post below its rail, as the edge map keeps it: two points one above the other (the
 // map's 0.2 m spacing), and the rail's top edge 0.5 m above them, a horizontal line. Too few for
 // a fitted line; as a post, an edge point on it gives its range error along the ray.
-liod::LocalMap rail_with_post() {
+liod::LocalMap edge_map_of(const std::vector<Eigen::Vector3d>& points) {
   liod::LocalMap map(1.0, liod::LocalMap::kMaxPointsPerVoxel, 0.0);
-  std::vector<Eigen::Vector3d> points{{5.52, -4.30, 0.10}, {5.56, -4.32, 0.32}};
-  for (int i = 0; i < 10; ++i) points.emplace_back(4.0 + 0.3 * i, -4.15, 0.80);
   map.add(points, 0);
   return map;
 }
 
+liod::LocalMap rail_with_post() {
+  std::vector<Eigen::Vector3d> points{{5.52, -4.30, 0.10}, {5.56, -4.32, 0.32}};
+  for (int i = 0; i < 10; ++i) points.emplace_back(4.0 + 0.3 * i, -4.15, 0.80);
+  return edge_map_of(points);
+}
+
+const Eigen::Vector3d kRoofSensor(0.0, 0.0, 1.83);  // the LiDAR's origin, 1.83 m above the road
+
+std::optional<liod::LinearResidual> post_at(const liod::LocalMap& map, const Eigen::Vector3d& query,
+                                            const Eigen::Vector3d& up = Eigen::Vector3d::UnitZ()) {
+  liod::LocalMap::NeighbourSearch search(map);
+  return liod::post_correspondence(search, query, up, kRoofSensor, liod::PostParams{});
+}
+
 TEST(MapCorrespondence, TwoPointsOfAShortPostGiveItsRangeAlongTheRay) {
   const liod::LocalMap map = rail_with_post();
-  liod::LocalMap::NeighbourSearch search(map);
   const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
-  const Eigen::Vector3d sensor(0.0, 0.0, 1.83);
-  const liod::PostParams posts;
+  const Eigen::Vector3d& sensor = kRoofSensor;
   liod::CorrespondenceParams lines;
   lines.neighbours = 8;
   lines.max_distance_m = 1.0;
@@ -128,10 +139,11 @@ TEST(MapCorrespondence, TwoPointsOfAShortPostGiveItsRangeAlongTheRay) {
   const Eigen::Vector3d ray = Eigen::Vector3d(axis.x() - sensor.x(), axis.y() - sensor.y(), 0.0).normalized();
   const Eigen::Vector3d beyond = axis + 0.05 * ray;
   const Eigen::Vector3d beside = axis + 0.05 * up.cross(ray);
+  liod::LocalMap::NeighbourSearch search(map);
   EXPECT_FALSE(liod::line_correspondence(search, beyond, lines, &sensor)) << "the post is no fitted line";
-  const auto on_axis = liod::post_correspondence(search, axis, up, sensor, posts);
-  const auto far = liod::post_correspondence(search, beyond, up, sensor, posts);
-  const auto across = liod::post_correspondence(search, beside, up, sensor, posts);
+  const auto on_axis = post_at(map, axis);
+  const auto far = post_at(map, beyond);
+  const auto across = post_at(map, beside);
   ASSERT_TRUE(on_axis && far && across);
   EXPECT_NEAR(on_axis->evaluate(axis), 0.0, 1e-3);
   EXPECT_NEAR(far->evaluate(beyond), 0.05, 1e-3);
@@ -142,24 +154,14 @@ TEST(MapCorrespondence, TwoPointsOfAShortPostGiveItsRangeAlongTheRay) {
 
 TEST(MapCorrespondence, HorizontalEdgesAndScatteredPointsAreNoPost) {
   const liod::LocalMap map = rail_with_post();
-  liod::LocalMap::NeighbourSearch search(map);
-  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
-  const Eigen::Vector3d sensor(0.0, 0.0, 1.83);
-  const liod::PostParams posts;
   // On the rail's top edge: its nearest points lie side by side, not one above the other.
-  EXPECT_FALSE(liod::post_correspondence(search, {6.7, -4.15, 0.80}, up, sensor, posts));
+  EXPECT_FALSE(post_at(map, {6.7, -4.15, 0.80}));
   // Two points 0.3 m apart across the vertical: no post between them.
-  liod::LocalMap wide(1.0, liod::LocalMap::kMaxPointsPerVoxel, 0.0);
-  wide.add({{2.5, 2.5, 0.3}, {2.8, 2.5, 0.5}}, 0);
-  liod::LocalMap::NeighbourSearch wide_search(wide);
-  EXPECT_FALSE(liod::post_correspondence(wide_search, {2.65, 2.5, 0.4}, up, sensor, posts));
+  EXPECT_FALSE(post_at(edge_map_of({{2.5, 2.5, 0.3}, {2.8, 2.5, 0.5}}), {2.65, 2.5, 0.4}));
   // A single point: nothing to tell a post from a speck.
-  liod::LocalMap single(1.0, liod::LocalMap::kMaxPointsPerVoxel, 0.0);
-  single.add({{2.5, 2.5, 0.3}}, 0);
-  liod::LocalMap::NeighbourSearch single_search(single);
-  EXPECT_FALSE(liod::post_correspondence(single_search, {2.5, 2.5, 0.35}, up, sensor, posts));
+  EXPECT_FALSE(post_at(edge_map_of({{2.5, 2.5, 0.3}}), {2.5, 2.5, 0.35}));
   // The same two post points seen with the world tilted 90 deg (up along x) lie side by side.
-  EXPECT_FALSE(liod::post_correspondence(search, {5.54, -4.31, 0.2}, Eigen::Vector3d::UnitX(), sensor, posts));
+  EXPECT_FALSE(post_at(map, {5.54, -4.31, 0.2}, Eigen::Vector3d::UnitX()));
 }
 
 }  // namespace
