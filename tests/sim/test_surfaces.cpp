@@ -139,5 +139,32 @@ TEST(SimSurfaces, LiodDecoderPointsLieOnSurfaces) {
   expect_on_surfaces(r, 0.03, 0.08, "liod decoder, noisy");
 }
 
+// The unit's true angles stray from its published table by at most the configured error, each
+// channel by its own amount, and only the angles change: the range biases stay the same draws.
+TEST(SimSurfaces, AngleErrorBoundsTheTrueAnglesAndLeavesTheRangeBiases) {
+  const std::string dir = scratch_dir("angle_error");
+  std::array<double, kChannels> biases{};
+  for (const double error : {0.0, 0.005, 0.02}) {
+    SimConfig c = short_config(RouteKind::Urban, 21, 1.0, dir);
+    c.angle_error_deg = error;
+    const Simulation sim(c);
+    const HeliosCalibration& published = sim.lidar().published();
+    const HeliosCalibration& truth = sim.lidar().true_angles();
+    double largest = 0.0;
+    for (int k = 0; k < kChannels; ++k) {
+      const auto i = static_cast<std::size_t>(k);
+      largest = std::max({largest, std::abs(truth.vertical_deg[i] - published.vertical_deg[i]),
+                          std::abs(truth.horizontal_deg[i] - published.horizontal_deg[i])});
+    }
+    EXPECT_LE(largest, error) << "angle error " << error;
+    EXPECT_GE(largest, 0.5 * error) << "angle error " << error;  // 64 uniform draws all below half: 5e-20
+    if (error == 0.0) {
+      biases = sim.lidar().channel_bias();
+    } else {
+      EXPECT_EQ(sim.lidar().channel_bias(), biases) << "angle error " << error;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace liod::sim::test

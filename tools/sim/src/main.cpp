@@ -35,6 +35,9 @@ int main(int argc, char** argv) {
       ->default_val(3.0);
   app.add_option("--imu-rate", cfg.imu_rate, "IMU samples per second")->default_val(200.0);
   app.add_flag("--no-noise", no_noise, "exact IMU and LiDAR ranges (detection dropouts remain)");
+  app.add_option("--angle-error-deg", cfg.angle_error_deg,
+                 "largest difference between the LiDAR's true and published beam angles, per channel")
+      ->default_val(0.005);
   app.add_flag("--dual-return", cfg.dual_return, "dual-return packets (strongest + last)");
   app.add_flag("--no-ego", no_ego, "do not let the LiDAR see its own car");
   app.add_option("--angles", cfg.angles_csv, "Helios-32 angle table (vert_deg,horiz_deg per channel)");
@@ -59,6 +62,10 @@ int main(int argc, char** argv) {
   }
   if (!(cfg.imu_rate >= 50.0) || cfg.imu_rate > 2000.0) {
     std::fprintf(stderr, "liod-sim: --imu-rate must be in [50, 2000] Hz, got %g\n", cfg.imu_rate);
+    return 2;
+  }
+  if (!(cfg.angle_error_deg >= 0.0) || cfg.angle_error_deg > 0.1) {
+    std::fprintf(stderr, "liod-sim: --angle-error-deg must be in [0, 0.1] degrees, got %g\n", cfg.angle_error_deg);
     return 2;
   }
   if (rolling && stationary) {

@@ -47,6 +47,7 @@ Simulation::Simulation(SimConfig config) : config_(std::move(config)) {
 
   lidar_params_.dual_return = config_.dual_return;
   lidar_noise_.enabled = config_.noise;
+  lidar_noise_.angle_error_deg = config_.angle_error_deg;
   imu_noise_.enabled = config_.noise;
   ego_ = EgoBody::passenger_car();
   const HeliosCalibration cal = load_angles_csv(config_.angles_csv);
