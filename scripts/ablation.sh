@@ -23,6 +23,7 @@ variants=(
   "full|"
   "fixed curvature (5+5)|odometry: {curvature: fixed}"
   "no posts (edges on fitted lines only)|odometry: {post_edges: false}"
+  "no beam calibration (published angles as they are)|odometry: {beam_calibration: false}"
   "no Hausdorff gating|odometry: {keyframe_gating: distance_angle}"
   "constant-velocity deskew|odometry: {deskew: constant_velocity}"
   "no deskew|odometry: {deskew: none}"

@@ -89,6 +89,7 @@ struct OdometryConfig {
   double plane_thickness_m = 0.03;       // every neighbour within this of its fitted plane
   bool fit_uncertainty = true;           // a residual's variance includes its fitted plane's / line's uncertainty
   EdgeResidual edge_residual = EdgeResidual::kAlongRay;
+  bool beam_calibration = true;  // learn each beam's elevation offset from its ground residuals (beam_calibration.hpp)
   bool post_edges = true;  // along_ray only: edges on posts (map points one above the other) match the post's axis
   double keyframe_distance_m = 1.0;
   double keyframe_angle_deg = 10.0;

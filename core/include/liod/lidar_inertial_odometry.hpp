@@ -10,6 +10,7 @@
 #include <optional>
 #include <vector>
 
+#include "liod/beam_calibration.hpp"
 #include "liod/config.hpp"
 #include "liod/curvature_features.hpp"
 #include "liod/imu_preintegration.hpp"
@@ -91,10 +92,15 @@ class LidarInertialOdometry {
   std::size_t inconsistent_imu_scans() const { return inconsistent_imu_scans_; }
 
  private:
+  struct RingPoint {
+    std::uint16_t ring;
+    Eigen::Vector3d lidar;
+  };
   struct Features {
     std::vector<Eigen::Vector3d> planes;      // registration queries (sparse)
     std::vector<Eigen::Vector3d> edges;
     std::vector<Eigen::Vector3d> map_planes;  // what a keyframe adds to the map (denser)
+    std::vector<RingPoint> map_plane_sources;  // each map plane point's beam and LiDAR-frame point
   };
   struct TimedPoint {
     double time;           // IMU clock
@@ -125,6 +131,8 @@ class LidarInertialOdometry {
   UpdateParams update_params_;
   FeatureExtractor extractor_;
   ScanFeatures scan_features_;
+  BeamElevationCalibration beam_calibration_;
+  void learn_beam_elevations(const Features& features);
 
   std::deque<ImuSample> imu_;
   std::size_t dropped_imu_ = 0;
