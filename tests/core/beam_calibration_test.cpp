@@ -42,29 +42,19 @@ TEST(BeamCalibration, LearnsEachBeamsOffsetFromItsGroundResidualsUpToTheHeightPa
   true_offset.push_back(0.004 * kDeg);  // the upward beam never sees the ground
 
   BeamElevationCalibration calibration(published_deg.size());
-  auto ground_residuals = [&](std::size_t beam) {
-    std::vector<double> residuals;
-    const double published = published_deg[beam] * kDeg;
-    const double truth = published + true_offset[beam];
-    if (truth >= 0.0) return residuals;
-    const double range = height / std::sin(-truth);
-    for (int a = 0; a < 180; ++a) {
-      const Eigen::Vector3d measured = range * direction(published, a * 2.0 * kDeg);
-      const Eigen::Vector3d corrected = calibration.correct(measured, static_cast<std::uint16_t>(beam));
-      residuals.push_back(corrected.z() + height);  // the ground plane z = -height, normal up
-    }
-    return residuals;
-  };
   for (int scan = 0; scan < 2000; ++scan) {
     for (std::size_t k = 0; k < published_deg.size(); ++k) {
-      const auto residuals = ground_residuals(k);
-      const double range = height / std::sin(-(published_deg[k] * kDeg + true_offset[k]));
-      for (std::size_t a = 0; a < residuals.size(); ++a) {
-        const Eigen::Vector3d point = calibration.correct(range * direction(published_deg[k] * kDeg, a * 2.0 * kDeg),
-                                                          static_cast<std::uint16_t>(k));
+      const auto beam = static_cast<std::uint16_t>(k);
+      const double published = published_deg[k] * kDeg;
+      const double truth = published + true_offset[k];
+      if (truth >= 0.0) continue;
+      const double range = height / std::sin(-truth);
+      for (int a = 0; a < 180; ++a) {
+        const Eigen::Vector3d point = calibration.correct(range * direction(published, a * 2.0 * kDeg), beam);
+        const double residual = point.z() + height;  // the ground plane z = -height, normal up
         const double jacobian = BeamElevationCalibration::elevation_derivative(point).z();
-        calibration.add(static_cast<std::uint16_t>(k), std::atan2(point.z(), std::hypot(point.x(), point.y())),
-                        jacobian, residuals[a], 0.03 * 0.03);
+        calibration.add(beam, std::atan2(point.z(), std::hypot(point.x(), point.y())), jacobian, residual,
+                        0.03 * 0.03);
       }
     }
     calibration.finish_scan();
@@ -81,10 +71,10 @@ TEST(BeamCalibration, LearnsEachBeamsOffsetFromItsGroundResidualsUpToTheHeightPa
   double spread_after = 0.0;
   for (std::size_t k = 0; k + 1 < published_deg.size(); ++k) {
     const double expected = true_offset[k] - et / ee * published_deg[k];
-    const auto k16 = static_cast<std::uint16_t>(k);
-    EXPECT_NEAR(calibration.offset_rad(k16) / kDeg, expected / kDeg, 0.0005) << "beam " << k << " true " << true_offset[k] / kDeg;
-    spread_before += std::pow(true_offset[k] - et / ee * published_deg[k], 2);
-    spread_after += std::pow(true_offset[k] - calibration.offset_rad(k16) - et / ee * published_deg[k], 2);
+    const double learned = calibration.offset_rad(static_cast<std::uint16_t>(k));
+    EXPECT_NEAR(learned / kDeg, expected / kDeg, 0.0005) << "beam " << k << " true " << true_offset[k] / kDeg;
+    spread_before += expected * expected;
+    spread_after += (expected - learned) * (expected - learned);
   }
   EXPECT_LT(spread_after, 0.01 * spread_before);
   EXPECT_EQ(calibration.offset_rad(static_cast<std::uint16_t>(published_deg.size() - 1)), 0.0) << "no ground, no data";
