@@ -49,6 +49,8 @@ TEST(Cli, JsonOnATumPair) {
   EXPECT_NEAR(j["duration_s"].get<double>(), 20.0, 1e-9);
   EXPECT_FALSE(j["kitti"]["translational_pct"].is_null());  // ~600 m of path
   EXPECT_NEAR(j["kitti"]["translational_pct"].get<double>(), 0.0, 1e-6);
+  EXPECT_NEAR(j["distance"]["error_pct"].get<double>(), 0.0, 1e-9);  // a rigid offset travels as far
+  EXPECT_NEAR(j["distance"]["ground_truth_m"].get<double>(), j["length_m"].get<double>(), 0.05 * j["length_m"].get<double>());
 
   const CliRun none = invoke({"--gt", tum_file("cli_gt.txt", gt), "--est", tum_file("cli_est.txt", est), "--json",
                         "--align", "none"});

@@ -92,6 +92,45 @@ TEST(RpePairs, FramesSecondsAndMetres) {
   EXPECT_EQ(m, (std::vector<std::pair<std::size_t, std::size_t>>{{2, 4}, {4, 6}, {6, 8}, {8, 10}}));
 }
 
+TEST(DistanceTravelled, AScaleErrorIsItsPercentageWhateverTheRigidMotion) {
+  const Poses gt = test::wiggly(2001, 0.25);  // 500 m of turns and climbs
+  const Eigen::Isometry3d motion = test::pose(100.0, -40.0, 3.0, 0.7);
+  Poses est;
+  for (const auto& p : gt) {
+    Eigen::Isometry3d q = p;
+    q.translation() *= 0.99;  // 1 % short
+    est.push_back(motion * q);
+  }
+  const auto d = compute_distance_travelled(gt, est);
+  ASSERT_TRUE(d);
+  EXPECT_NEAR(d->error_pct, -1.0, 1e-9);
+  EXPECT_NEAR(d->estimate_m, 0.99 * d->ground_truth_m, 1e-9);
+  EXPECT_GT(d->ground_truth_m, 0.95 * path_distances(gt).back());  // 1 m chords of a gentle curve
+  EXPECT_EQ(d->steps, rpe_pairs({}, gt, {1.0, DeltaUnit::Metres}).size());
+}
+
+TEST(DistanceTravelled, AStandstillsJitterAddsNothing) {
+  // 50 m, a standstill of 100 poses, 50 m more; the estimate jitters 2 cm while standing.
+  Poses gt;
+  for (int i = 0; i <= 50; ++i) gt.push_back(test::pose(i, 0, 0));
+  for (int i = 0; i < 100; ++i) gt.push_back(test::pose(50, 0, 0));
+  for (int i = 51; i <= 100; ++i) gt.push_back(test::pose(i, 0, 0));
+  Poses est = gt;
+  for (std::size_t i = 51; i < 150; ++i) est[i].translation().y() = (i % 2 == 0 ? 0.02 : -0.02);
+  const auto d = compute_distance_travelled(gt, est);
+  ASSERT_TRUE(d);
+  EXPECT_NEAR(d->ground_truth_m, 99.0, 1e-9);  // from the first 1 m crossing on, as rpe_pairs counts
+  EXPECT_NEAR(d->error_pct, 0.0, 1e-9);
+  // Summed pose to pose, the jitter would read as 2 % too long.
+  EXPECT_GT(path_distances(est).back() - path_distances(gt).back(), 1.9);
+}
+
+TEST(DistanceTravelled, NoneWithoutMotionAndABadStepIsAnError) {
+  const Poses still(10, test::pose(3, 4, 5));
+  EXPECT_FALSE(compute_distance_travelled(still, still));
+  EXPECT_THROW(compute_distance_travelled(line(5), line(5), 0.0), InputError);
+}
+
 TEST(Rpe, TooShortForDeltaIsNotANumber) {
   const Poses gt = line(5);
   EXPECT_FALSE(compute_rpe(seconds(5, 0.1), gt, gt, {1.0, DeltaUnit::Seconds}));

@@ -27,6 +27,7 @@ TEST(Report, JsonCarriesTheFiguresUnderStableKeys) {
   EXPECT_NEAR(j["duration_s"].get<double>(), 11.9, 1e-9);
   EXPECT_GT(j["length_m"].get<double>(), 30.0);
   EXPECT_LT(j["length_m"].get<double>(), 100.0);
+  EXPECT_NEAR(j["distance"]["error_pct"].get<double>(), 0.0, 1e-9);  // shifted sideways, as far travelled
   EXPECT_EQ(j["alignment"]["mode"], "none");
   EXPECT_EQ(j["association"]["method"], "nearest");
   EXPECT_EQ(j["rpe"]["delta_unit"], "s");

@@ -46,6 +46,7 @@ EvalResult evaluate(const Trajectory& gt, const Trajectory& est, const EvalOptio
 
   r.kitti = kitti_odometry_error(a.gt, r.est_aligned, options.kitti);
   r.length_m = r.kitti.gt_length_m;
+  r.distance = compute_distance_travelled(a.gt, a.est);
   if (!r.kitti.translational_pct) {
     std::ostringstream msg;
     msg << std::fixed << std::setprecision(1) << "KITTI metric not computed: the ground-truth path is "

@@ -123,4 +123,19 @@ std::optional<RpeResult> compute_rpe(const std::vector<double>& stamps, const Po
   return r;
 }
 
+std::optional<DistanceResult> compute_distance_travelled(const Poses& gt, const Poses& est, double step_m) {
+  if (!(step_m > 0.0)) throw InputError("the distance step must be positive");
+  const auto pairs = rpe_pairs({}, gt, {step_m, DeltaUnit::Metres});
+  if (pairs.empty()) return std::nullopt;
+  DistanceResult r;
+  r.step_m = step_m;
+  r.steps = pairs.size();
+  for (const auto& [i, j] : pairs) {
+    r.ground_truth_m += (gt[j].translation() - gt[i].translation()).norm();
+    r.estimate_m += (est[j].translation() - est[i].translation()).norm();
+  }
+  r.error_pct = 100.0 * (r.estimate_m / r.ground_truth_m - 1.0);
+  return r;
+}
+
 }  // namespace liod::eval

@@ -66,6 +66,12 @@ std::string format_table(const EvalResult& r) {
   out << "alignment      " << alignment_text(r) << '\n';
   std::snprintf(buf, sizeof buf, "length         %.3f m (ground truth path over the pairs)\n", r.length_m);
   out << buf;
+  if (r.distance) {
+    std::snprintf(buf, sizeof buf, "distance       %.3f m estimate, %.3f m ground truth (%+.3f %%; %zu steps of %g m)\n",
+                  r.distance->estimate_m, r.distance->ground_truth_m, r.distance->error_pct, r.distance->steps,
+                  r.distance->step_m);
+    out << buf;
+  }
   out << "duration       " << (r.duration_s ? opt(r.duration_s, 3) + " s" : std::string("n/a (no timestamps)"))
       << "\n\n";
 
@@ -125,6 +131,15 @@ Json to_json(const EvalResult& r) {
   j["association"] = assoc;
   j["length_m"] = r.length_m;
   j["duration_s"] = opt_json(r.duration_s);
+  if (r.distance) {
+    j["distance"] = {{"step_m", r.distance->step_m},
+                     {"steps", r.distance->steps},
+                     {"ground_truth_m", r.distance->ground_truth_m},
+                     {"estimate_m", r.distance->estimate_m},
+                     {"error_pct", r.distance->error_pct}};
+  } else {
+    j["distance"] = nullptr;
+  }
 
   const Similarity& T = r.alignment.transform;
   json R = json::array();

@@ -35,6 +35,8 @@ struct EvalResult {
   KittiResult kitti;
   /// Ground-truth path length over the paired poses.
   double length_m = 0.0;
+  /// Distance travelled by the unaligned estimate against the ground truth's, in 1 m steps.
+  std::optional<DistanceResult> distance;
   /// Time span of the pairs; nullopt when paired by index.
   std::optional<double> duration_s;
   /// Things the reader of the numbers must know (degenerate alignment, metric not computable, ...).

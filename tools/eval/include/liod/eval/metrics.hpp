@@ -70,4 +70,20 @@ struct RpeResult {
 std::optional<RpeResult> compute_rpe(const std::vector<double>& stamps, const Poses& gt, const Poses& est,
                                      const RpeOptions& options);
 
+/// Distance travelled by each trajectory, summed over steps of at least `step_m` of ground-truth
+/// path (rpe_pairs in metres): a scale error of the estimate shows as its percentage, where the ATE
+/// after alignment hides most of it; a standstill's jitter adds nothing. est unaligned (lengths do
+/// not change under a rigid motion, a Sim(3) alignment would scale them).
+struct DistanceResult {
+  double step_m = 1.0;
+  std::size_t steps = 0;
+  double ground_truth_m = 0.0;
+  double estimate_m = 0.0;
+  /// 100 (estimate / ground truth - 1): negative when the estimate came out short.
+  double error_pct = 0.0;
+};
+
+/// nullopt when the ground truth never travels step_m.
+std::optional<DistanceResult> compute_distance_travelled(const Poses& gt, const Poses& est, double step_m = 1.0);
+
 }  // namespace liod::eval

@@ -11,7 +11,7 @@ namespace liod::eval {
 std::string format_table(const EvalResult& result);
 
 /// Keys: ate.rmse_m, ate.rot_rmse_deg, rpe.trans_rmse_m, kitti.translational_pct,
-/// kitti.rotational_deg_per_100m, poses_associated, length_m, duration_s, alignment.mode, ...
+/// kitti.rotational_deg_per_100m, poses_associated, length_m, distance.error_pct, duration_s, alignment.mode, ...
 /// A figure that could not be computed is null, never 0. Keys keep the order of the table.
 nlohmann::ordered_json to_json(const EvalResult& result);
 
