@@ -130,7 +130,6 @@ Json to_json(const EvalResult& r) {
   }
   j["association"] = assoc;
   j["length_m"] = r.length_m;
-  j["duration_s"] = opt_json(r.duration_s);
   if (r.distance) {
     j["distance"] = {{"step_m", r.distance->step_m},
                      {"steps", r.distance->steps},
@@ -140,6 +139,7 @@ Json to_json(const EvalResult& r) {
   } else {
     j["distance"] = nullptr;
   }
+  j["duration_s"] = opt_json(r.duration_s);
 
   const Similarity& T = r.alignment.transform;
   json R = json::array();
