@@ -339,7 +339,7 @@ void LidarInertialOdometry::learn_beam_elevations(const Features& features) {
     const double horizontal = std::hypot(source.lidar.x(), source.lidar.y());
     const double elevation = std::atan2(source.lidar.z(), horizontal);
     if (horizontal < kBeamMinRangeM || elevation > kBeamMaxElevationRad) continue;
-    if (source.ring < seen.size() && seen[source.ring]++ % kBeamPointStride != 0) continue;
+    if (source.ring >= seen.size() || seen[source.ring]++ % kBeamPointStride != 0) continue;  // add() would drop it
     const Eigen::Vector3d world = state_.rotation * features.map_planes[i] + state_.position;
     const auto plane = plane_correspondence(search, world, update_params_.correspondence);
     if (!plane || std::abs(plane->normal.dot(up)) < kGroundNormalCos) continue;
