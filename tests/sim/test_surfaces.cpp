@@ -166,5 +166,36 @@ TEST(SimSurfaces, AngleErrorBoundsTheTrueAnglesAndLeavesTheRangeBiases) {
   }
 }
 
+// Each channel's ranges carry its own calibration bias (the scenario's channel_bias_m) on top of the
+// noise: averaged over many returns off a wall 10 m away, a channel reads 10 m plus its bias.
+TEST(SimSurfaces, EachChannelsRangesCarryItsBias) {
+  const std::string dir = scratch_dir("channel_bias");
+  const Simulation sim(short_config(RouteKind::Urban, 21, 1.0, dir));
+  const auto& biases = sim.lidar().channel_bias();
+  RayHit wall;
+  wall.range = 10.0;
+  wall.cos_incidence = 1.0;
+  wall.reflectivity = 0.5F;
+  Rng rng(7);
+  constexpr int kDraws = 4000;  // the mean's error: ~0.02 m / sqrt(4000) = 0.3 mm
+  double largest_bias = 0.0;
+  for (int c = 0; c < kChannels; ++c) {
+    double sum = 0.0;
+    int n = 0;
+    for (int k = 0; k < kDraws; ++k) {
+      ChannelReturn out{};
+      double strength = 0.0;
+      if (!sim.lidar().measure(wall, false, c, rng, out, &strength)) continue;
+      sum += out.raw * kRangeUnit;
+      ++n;
+    }
+    ASSERT_GT(n, kDraws * 9 / 10) << "channel " << c;
+    const auto i = static_cast<std::size_t>(c);
+    EXPECT_NEAR(sum / n - 10.0, biases[i], 0.0015) << "channel " << c;
+    largest_bias = std::max(largest_bias, std::abs(biases[i]));
+  }
+  EXPECT_GT(largest_bias, 0.005);  // 32 draws of sigma 4 mm: the check above sees the biases
+}
+
 }  // namespace
 }  // namespace liod::sim::test

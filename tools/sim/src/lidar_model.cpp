@@ -127,7 +127,7 @@ LidarModel::LidarModel(const HeliosCalibration& published, const LidarParams& pa
   }
 }
 
-bool LidarModel::measure(const RayHit& hit, bool ego, Rng& rng, ChannelReturn& out,
+bool LidarModel::measure(const RayHit& hit, bool ego, int channel, Rng& rng, ChannelReturn& out,
                          double* strength) const {
   const double d = hit.range;
   double rho = hit.reflectivity;
@@ -156,7 +156,7 @@ bool LidarModel::measure(const RayHit& hit, bool ego, Rng& rng, ChannelReturn& o
   if (noise_.enabled) {
     const double sigma = noise_.range_sigma + noise_.range_sigma_per_m * d +
                          noise_.weak_return_sigma / std::sqrt(std::max(snr, 0.3));
-    measured += rng.gaussian(sigma);
+    measured += rng.gaussian(sigma) + bias_[static_cast<std::size_t>(channel)];
   }
   if (measured < params_.min_range || measured > params_.max_range) {
     return false;
@@ -196,10 +196,10 @@ void LidarModel::fire(int az_step, const Pose& start, const Pose& next, const Wo
       eh.range = ego_t;
       eh.cos_incidence = 0.5;
       eh.reflectivity = ego_reflectivity_;
-      measure(eh, true, ctx.rng(), first, &s1);
+      measure(eh, true, c, ctx.rng(), first, &s1);
       second = first;
     } else if (found) {
-      const bool got = measure(hit, false, ctx.rng(), first, &s1);
+      const bool got = measure(hit, false, c, ctx.rng(), first, &s1);
       second = first;
       if (params_.dual_return && hit.kind == SurfaceKind::Porous) {
         // A beam partly blocked by foliage also returns from what lies behind it.
@@ -209,7 +209,7 @@ void LidarModel::fire(int az_step, const Pose& start, const Pose& next, const Wo
           behind.range += t0;
           ChannelReturn last{};
           double s2 = 0.0;
-          if (measure(behind, false, ctx.rng(), last, &s2)) {
+          if (measure(behind, false, c, ctx.rng(), last, &s2)) {
             if (!got || s2 > s1) {
               first = last;
             }

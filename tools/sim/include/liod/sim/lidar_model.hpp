@@ -88,8 +88,11 @@ class LidarModel {
   const HeliosCalibration& true_angles() const { return true_; }
   const std::array<double, kChannels>& channel_bias() const { return bias_; }
 
+  /// What `channel` reports of a ray that met `hit` (range noise, the channel's range bias,
+  /// quantisation, intensity); false when the return is not detected. `strength`: its SNR.
+  bool measure(const RayHit& hit, bool ego, int channel, Rng& rng, ChannelReturn& out, double* strength) const;
+
  private:
-  bool measure(const RayHit& hit, bool ego, Rng& rng, ChannelReturn& out, double* strength) const;
 
   HeliosCalibration published_;
   HeliosCalibration true_;
