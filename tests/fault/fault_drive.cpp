@@ -88,4 +88,8 @@ const FaultDrive* rails_drive() {
   return simulated_drive("rails-drive", "--route highway --seed 2 --duration 8 --max-speed 12");
 }
 
+const FaultDrive* posts_drive() {
+  return simulated_drive("posts-drive", "--route highway --seed 4 --duration 12 --max-speed 12");
+}
+
 }  // namespace liod::test

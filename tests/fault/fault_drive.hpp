@@ -27,6 +27,11 @@ const FaultDrive* fault_drive();
 /// between guardrails, with few posts in sight (made like the fault drive, in test-data/rails-drive/).
 const FaultDrive* rails_drive();
 
+/// `liod-sim --route highway --seed 4 --duration 12 --max-speed 12`: a rolling start at 12 m/s
+/// where the guard rail's posts, 4 m apart, are seen only where a ring passes below the rail
+/// (made like the fault drive, in test-data/posts-drive/).
+const FaultDrive* posts_drive();
+
 }  // namespace liod::test
 
 #define LIOD_REQUIRE_DRIVE(var, drive)                                                           \

@@ -140,7 +140,8 @@ class LidarInertialOdometry {
   bool initialized_ = false;
   bool map_trusted_ = false;
   // A rolling start until the scans' vertical structure tells the speed: the scans' structure
-  // points, and the overlap of consecutive pairs without the rails summed per speed hypothesis.
+  // points, and the overlap of each with those before it, without the rails, summed per speed
+  // hypothesis.
   struct SpeedSearch {
     double first_end_time = 0.0;
     bool first_pair_standstill = false;  // its best speed with all of the structure, below 1 m/s
