@@ -3,11 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
-namespace liod {
+#include "liod/angles.hpp"
 
-namespace {
-constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
-}
+namespace liod {
 
 BeamElevationCalibration::BeamElevationCalibration(std::size_t beams, const BeamCalibrationParams& params)
     : params_(params),

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "liod/angles.hpp"
 #include "liod/gravity_alignment.hpp"
 #include "liod/hausdorff.hpp"
 #include "liod/map_correspondence.hpp"
@@ -21,7 +22,6 @@ double elapsed_ms(Clock::time_point since) {
   return std::chrono::duration<double, std::milli>(Clock::now() - since).count();
 }
 
-constexpr double kDegToRad = M_PI / 180.0;
 // While the speed is this uncertain, the deskew of the first scans is unreliable (rolling start).
 constexpr double kTrustedVelocityStd = 0.3;
 // The IMU kept at most, back from its newest sample.

@@ -7,6 +7,7 @@
 #include <limits>
 #include <unordered_map>
 
+#include "liod/angles.hpp"
 #include "liod/voxel_grid.hpp"
 
 namespace liod {
@@ -49,7 +50,7 @@ std::vector<std::size_t> off_along_track_lines(const std::vector<Eigen::Vector3d
   cells.reserve(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) cells[voxel_of(flat(points[i]), inverse)].push_back(i);
   const Eigen::Vector2d along = direction.normalized();
-  const double min_cos = std::cos(params.max_angle_deg * M_PI / 180.0);
+  const double min_cos = std::cos(params.max_angle_deg * kDegToRad);
   const double radius_squared = params.radius_m * params.radius_m;
   std::vector<std::size_t> out;
   for (std::size_t i = 0; i < points.size(); ++i) {

@@ -15,12 +15,12 @@
 #include <ctime>
 #include <stdexcept>
 
+#include "liod/angles.hpp"
 #include "liod/drivers/byte_order.hpp"
 
 namespace liod::drivers {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
 constexpr std::uint16_t kJ1939NotValid = 0xFB00;  // 0xFB00..0xFFFF: error / not available
 
 int quantity_index(const std::string& q) {

@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <vector>
 
+#include "liod/angles.hpp"
 #include "liod/drivers/byte_order.hpp"
 #include "liod/drivers/input_error.hpp"
 #include "liod/drivers/rs_helios_calibration.hpp"
@@ -42,7 +42,7 @@ const std::vector<std::array<float, 2>>& azimuth_trig() {
   static const std::vector<std::array<float, 2>> table = [] {
     std::vector<std::array<float, 2>> t(kFullCircle);
     for (std::int32_t a = 0; a < kFullCircle; ++a) {
-      const double rad = a * 0.01 * std::numbers::pi / 180.0;
+      const double rad = a * 0.01 * kDegToRad;
       t[static_cast<std::size_t>(a)] = {static_cast<float>(std::cos(rad)), static_cast<float>(std::sin(rad))};
     }
     return t;
@@ -77,7 +77,7 @@ void MsopDecoder::set_angles(std::span<const double> vertical_deg, std::span<con
                          " lasers");
   rings_by_elevation(vertical_deg.first(lasers), std::span<std::uint16_t>(rings_.data(), lasers));
   for (std::size_t i = 0; i < lasers; ++i) {
-    const double el = vertical_deg[i] * std::numbers::pi / 180.0;
+    const double el = vertical_deg[i] * kDegToRad;
     lasers_[i].cos_el = static_cast<float>(std::cos(el));
     lasers_[i].sin_el = static_cast<float>(std::sin(el));
     lasers_[i].horiz_units = static_cast<std::int32_t>(std::lround(horizontal_deg[i] * 100.0));

@@ -3,12 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "liod/angles.hpp"
 #include "liod/voxel_grid.hpp"
 
 namespace liod {
 namespace {
-
-constexpr double kDegToRad = M_PI / 180.0;
 
 Eigen::Isometry3d isometry(const NavState& s) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();

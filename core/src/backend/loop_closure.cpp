@@ -6,6 +6,7 @@
 #include <limits>
 #include <unordered_map>
 
+#include "liod/angles.hpp"
 #include "liod/iterated_update.hpp"
 #include "liod/local_map.hpp"
 #include "liod/map_correspondence.hpp"
@@ -14,8 +15,6 @@
 
 namespace liod {
 namespace {
-
-constexpr double kDegToRad = M_PI / 180.0;
 
 // Nearest-neighbour distances below `cap` for many queries against one cloud: cells of size
 // cap, so every neighbour closer than cap lies in the 27 cells around the query.
