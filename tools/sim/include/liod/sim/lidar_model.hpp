@@ -93,7 +93,6 @@ class LidarModel {
   bool measure(const RayHit& hit, bool ego, int channel, Rng& rng, ChannelReturn& out, double* strength) const;
 
  private:
-
   HeliosCalibration published_;
   HeliosCalibration true_;
   LidarParams params_;
