@@ -34,6 +34,10 @@ constexpr double kStructureRange_m = 80.0;
 constexpr double kStructureVoxel_m = 0.1;    // thinning of the structure points (3-D)
 constexpr double kFootprintRadius_m = 0.12;  // posts are 8 cm; the fine speed step moves 5 mm per 0.1 s
 constexpr double kMinSpeedScore = 20.0;      // about as many structure points matched (a pair, or all summed)
+// A scan's structure is scored against this many scans before it: a post passes a sensor-locked
+// window within a few scans, and the cost per hypothesis grows with the points held (twenty dense
+// urban scans took a minute a scan when the search was kept from deciding).
+constexpr std::size_t kSpeedSearchMemory = 4;
 // Without that much structure off the rails for so long, the first pair's standstill stands if it
 // saw one, else the speed is left to the LiDAR's registration under the wide prior.
 constexpr double kMaxSpeedSearch_s = 2.0;
@@ -495,8 +499,8 @@ std::optional<double> LidarInertialOdometry::search_speed(const Scan& scan) {
     return start;
   };
   auto placement = [&](double speed) { return integrate_imu_poses(start_at(speed), intervals, base.gravity); };
-  // The overlap of scan k with all the scans before it, each placed by one hypothesis's poses.
-  // Not with scan k - 1 alone: where a ring passes below a guard rail only in a window fixed in
+  // The overlap of scan k with the kSpeedSearchMemory scans before it, each placed by one
+  // hypothesis's poses. Not with scan k - 1 alone: where a ring passes below a guard rail only in a window fixed in
   // the sensor's frame, consecutive scans see different posts, and a speed that moves each post
   // onto the next one's place in the scan before (about v + spacing / 0.1 s) overlaps as well as
   // the true one (highway seed 2 at 12 m/s: 49 m/s won). Only the true speed also lands a post
@@ -504,7 +508,7 @@ std::optional<double> LidarInertialOdometry::search_speed(const Scan& scan) {
   auto score_against_earlier = [&](const PoseTable& world, std::size_t k,
                                    std::vector<TimedPoint> StructurePoints::*points) {
     std::vector<Eigen::Vector3d> earlier;
-    for (std::size_t j = 0; j < k; ++j) {
+    for (std::size_t j = k > kSpeedSearchMemory ? k - kSpeedSearchMemory : 0; j < k; ++j) {
       const auto placed_j = placed(search.structure[j].*points, world);
       earlier.insert(earlier.end(), placed_j.begin(), placed_j.end());
     }
