@@ -500,11 +500,12 @@ std::optional<double> LidarInertialOdometry::search_speed(const Scan& scan) {
   };
   auto placement = [&](double speed) { return integrate_imu_poses(start_at(speed), intervals, base.gravity); };
   // The overlap of scan k with the kSpeedSearchMemory scans before it, each placed by one
-  // hypothesis's poses. Not with scan k - 1 alone: where a ring passes below a guard rail only in a window fixed in
-  // the sensor's frame, consecutive scans see different posts, and a speed that moves each post
-  // onto the next one's place in the scan before (about v + spacing / 0.1 s) overlaps as well as
-  // the true one (highway seed 2 at 12 m/s: 49 m/s won). Only the true speed also lands a post
-  // on itself seen two or more scans before; the alias is off there by a fraction of a spacing.
+  // hypothesis's poses. Not with scan k - 1 alone: where a ring passes below a guard rail only in
+  // a window fixed in the sensor's frame, consecutive scans see different posts, and a speed that
+  // moves each post onto the next one's place in the scan before (about v + spacing / 0.1 s)
+  // overlaps as well as the true one (highway seed 2 at 12 m/s: 49 m/s won). Only the true speed
+  // also lands a post on itself seen two or more scans before; the alias is off there by a
+  // fraction of a spacing.
   auto score_against_earlier = [&](const PoseTable& world, std::size_t k,
                                    std::vector<TimedPoint> StructurePoints::*points) {
     std::vector<Eigen::Vector3d> earlier;

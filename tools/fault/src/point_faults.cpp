@@ -1,11 +1,11 @@
 // What the MSOP packets carry: corrupted returns, or only the ground.
 #include <cmath>
-#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "faults.hpp"
+#include "liod/angles.hpp"
 #include "liod/fault/helios_packet_edit.hpp"
 
 namespace liod::fault {
@@ -40,7 +40,7 @@ std::string apply(const GroundOnly& f, Recording& r, Rng&) {
   const auto elevations = laser_elevations_deg(r);
   if (!elevations) throw std::invalid_argument("ground-only: the recording has no DIFOP with a valid angle table");
   std::vector<double> sin_el;
-  for (const double deg : *elevations) sin_el.push_back(std::sin(deg * std::numbers::pi / 180.0));
+  for (const double deg : *elevations) sin_el.push_back(std::sin(deg * kDegToRad));
   std::size_t returns = 0;
   std::size_t blanked = 0;
   for (Packet& p : r.packets) {
