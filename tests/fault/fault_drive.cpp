@@ -92,4 +92,8 @@ const FaultDrive* posts_drive() {
   return simulated_drive("posts-drive", "--route highway --seed 4 --duration 12 --max-speed 12");
 }
 
+const FaultDrive* parked_car_drive() {
+  return simulated_drive("parked-car-drive", "--route highway --seed 7 --duration 12 --max-speed 12");
+}
+
 }  // namespace liod::test

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "liod/beam_calibration.hpp"
+#include "liod/body_rocking.hpp"
 #include "liod/config.hpp"
 #include "liod/curvature_features.hpp"
 #include "liod/imu_preintegration.hpp"
@@ -116,6 +117,8 @@ class LidarInertialOdometry {
   /// Adds the scan to the speed search; the speed at the first scan once the evidence suffices.
   std::optional<double> search_speed(const Scan& scan);
   void start_at_speed(double speed);
+  /// What the gyro's roll-and-pitch rocking says of the motion up to `time` (body_rocking.hpp).
+  BodyMotion body_motion_until(double time) const;
   void process_scan(const Scan& scan, OdometryResult& result);
   PoseTable deskew_trajectory(const Scan& scan, const NavState& start, const NavState& predicted_end,
                               const std::vector<ImuInterval>& intervals) const;
