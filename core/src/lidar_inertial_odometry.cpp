@@ -38,6 +38,10 @@ constexpr double kMinSpeedScore = 20.0;      // about as many structure points m
 // window within a few scans, and the cost per hypothesis grows with the points held (twenty dense
 // urban scans took a minute a scan when the search was kept from deciding).
 constexpr std::size_t kSpeedSearchMemory = 4;
+// And at most this many structure points a scan off the rails: a search call places and indexes
+// each hypothesis's union anew, and a dense town start (5,800 a scan) took 0.7-1.7 s a call, which
+// a standstill repeats until the IMU has had its say (half a second). Sparse roads hold 15-40.
+constexpr std::size_t kMaxSearchPointsPerScan = 2500;
 // Without that much structure off the rails for so long, the first pair's standstill stands if it
 // saw one, else the speed is left to the LiDAR's registration under the wide prior.
 constexpr double kMaxSpeedSearch_s = 2.0;
@@ -471,8 +475,11 @@ LidarInertialOdometry::StructurePoints LidarInertialOdometry::vertical_structure
   StructurePoints out;
   for (const auto i : thinned) out.all.push_back(candidates[i]);
   const Eigen::Vector3d forward = state_.rotation * o.forward_axis;
-  for (const auto k : off_along_track_lines(thinned_levelled, forward.head<2>(), AlongTrackLineParams{})) {
-    out.off_lines.push_back(candidates[thinned[k]]);
+  const auto off_lines = off_along_track_lines(thinned_levelled, forward.head<2>(), AlongTrackLineParams{});
+  // Every stride-th in sweep order, evenly round the scan, within the budget.
+  const std::size_t stride = (off_lines.size() + kMaxSearchPointsPerScan - 1) / kMaxSearchPointsPerScan;
+  for (std::size_t k = 0; k < off_lines.size(); k += std::max<std::size_t>(stride, 1)) {
+    out.off_lines.push_back(candidates[thinned[off_lines[k]]]);
   }
   return out;
 }
