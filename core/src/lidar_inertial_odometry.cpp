@@ -378,7 +378,7 @@ void LidarInertialOdometry::initialize(const Scan& scan, OdometryResult& result)
   // The speed, unknown even at rest, is searched for from the next scan on.
   speed_search_ = SpeedSearch{};
   speed_search_->first_end_time = scan_end_time(scan);
-  speed_search_->previous = scan;
+  speed_search_->held.push_back(scan);
   speed_search_->structure.push_back(vertical_structure_points(scan));
   covariance_.diagonal().segment<3>(9).setConstant(o.init_gyro_bias_std * o.init_gyro_bias_std);
   covariance_.diagonal().segment<3>(12).setConstant(o.init_accel_bias_std * o.init_accel_bias_std);
@@ -407,7 +407,7 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
   }
   if (speed_search_) {
     const double end = scan_end_time(scan);
-    if (!(end > scan_end_time(speed_search_->previous))) {
+    if (!(end > scan_end_time(speed_search_->held.back()))) {
       // The LiDAR's clock stepped back. Only the attitude has been reported: start afresh from
       // this scan rather than wait (perhaps for hours) for the old time to come round again.
       speed_search_.reset();
@@ -426,18 +426,30 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
       // the LiDAR decides. The state is carried by the IMU to the scan before this one, which
       // becomes the first keyframe. Not through all of the scans so far: with the speed this
       // uncertain, their map pulls the speed towards a standstill scan by scan (highway seed 1,
-      // six scans: 14.5 -> 13.3 m/s).
-      if (!speed && speed_search_->first_pair_standstill && body_motion_until(end) != BodyMotion::kRocking) speed = 0.0;
+      // six scans: 14.5 -> 13.3 m/s). But a standstill, whose map pulls the right way, is
+      // registered from the first scan on: it may have waited up to kMaxSpeedSearch_s for the
+      // body to stop rocking, and the IMU alone, its gyro bias taken from a rocking body, would
+      // have tilted the first keyframe (h1s rocked at rest for 2.5 s: 6.4 m ATE, from the first
+      // scan 0.4 m).
+      // The rails' standstill of the first pair, not the standstill off the rails, is what a rocking
+      // body overrules: between rails a moving car's first pair sees one too.
+      if (!speed && (speed_search_->evidence_standstill ||
+                     (speed_search_->first_pair_standstill && body_motion_until(end) != BodyMotion::kRocking))) {
+        speed = 0.0;
+      }
       if (speed) start_at_speed(*speed);
-      const Scan previous = std::move(speed_search_->previous);
+      std::vector<Scan> held = std::move(speed_search_->held);
       speed_search_.reset();
-      OdometryResult first_keyframe;
-      process_scan(previous, first_keyframe);
+      const bool standstill = speed && std::abs(*speed) < kStandstillSpeed;
+      for (std::size_t i = standstill ? 0 : held.size() - 1; i < held.size(); ++i) {
+        OdometryResult unreported;  // the first keyframe, and the standstill's scans before this one
+        process_scan(held[i], unreported);
+      }
       result.status |= kStatusInitializing;
       process_scan(scan, result);
       return result;
     }
-    speed_search_->previous = scan;
+    speed_search_->held.push_back(scan);
     return std::nullopt;  // no pose until the speed is known
   }
   if (!(scan_end_time(scan) > state_.time)) return std::nullopt;  // a scan from the past (clock jump)
@@ -540,7 +552,6 @@ std::optional<double> LidarInertialOdometry::search_speed(const Scan& scan) {
       search.first_pair_standstill = true;
     }
   }
-  const BodyMotion motion = body_motion_until(scan_end_time(scan));
   // A standstill, or not enough to tell: the rails' footprints move with the sensor and vote for
   // a standstill that may not be (off_along_track_lines), so without them, and summed over the
   // scans until enough structure has passed (one scan on a highway often holds a post or two).
@@ -549,24 +560,17 @@ std::optional<double> LidarInertialOdometry::search_speed(const Scan& scan) {
   for (std::size_t i = 0; i < hypotheses.size(); ++i) {
     search.evidence[i] += score_against_earlier(placement(hypotheses[i]), newest, &StructurePoints::off_lines);
   }
-  // Rocking on its springs, the car is rolling: a standstill's peak is what moves with the sensor
-  // (a car parked beside the road, seen through the window the ego roof leaves, highway seed 7 at
-  // 12 m/s: 41 m ATE taken for a standstill), and the speed is the best peak away from it. A peak,
-  // not the standstill's flank.
-  std::optional<std::size_t> best;
-  for (std::size_t i = 0; i < hypotheses.size(); ++i) {
-    const double e = search.evidence[i];
-    if (motion == BodyMotion::kRocking) {
-      const bool peak = (i == 0 || e > search.evidence[i - 1]) &&
-                        (i + 1 == hypotheses.size() || e >= search.evidence[i + 1]);
-      if (!peak || std::abs(hypotheses[i]) < kStandstillSpeed) continue;
-    }
-    if (!best || e > search.evidence[*best]) best = i;
-  }
-  if (!best || search.evidence[*best] < kMinSpeedScore) return std::nullopt;
-  const double centre = hypotheses[*best];
-  // A standstill waits for the IMU's word on the rocking (at most kMaxSpeedSearch_s).
-  if (std::abs(centre) < kStandstillSpeed && motion == BodyMotion::kUnknown) return std::nullopt;
+  const auto best = std::max_element(search.evidence.begin(), search.evidence.end());
+  if (*best < kMinSpeedScore) return std::nullopt;
+  const double centre = hypotheses[static_cast<std::size_t>(best - search.evidence.begin())];
+  // A standstill waits for the IMU to say the body is still (body_rocking.hpp): what moves with
+  // the sensor scores a standstill best, and a car parked beside the road, seen through the window
+  // the ego roof leaves, did so for the first two scans of a start at 12 m/s (highway seed 7: 41 m
+  // ATE); by the fifth the true speed leads. While the body rocks, the search goes on; a car
+  // rocked at rest (a door shut) keeps its standstill's lead, decided once the rocking ends or at
+  // the time limit.
+  search.evidence_standstill = std::abs(centre) < kStandstillSpeed;
+  if (search.evidence_standstill && body_motion_until(scan_end_time(scan)) != BodyMotion::kStill) return std::nullopt;
   return refine_around(
              [&](double speed) {
                const PoseTable world = placement(speed);  // once for all the scans

@@ -92,6 +92,10 @@ const FaultDrive* posts_drive() {
   return simulated_drive("posts-drive", "--route highway --seed 4 --duration 12 --max-speed 12");
 }
 
+const FaultDrive* rest_drive() {
+  return simulated_drive("rest-drive", "--route highway --seed 1 --duration 12 --max-speed 12 --static-start");
+}
+
 const FaultDrive* parked_car_drive() {
   return simulated_drive("parked-car-drive", "--route highway --seed 7 --duration 12 --max-speed 12");
 }

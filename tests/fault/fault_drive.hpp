@@ -32,6 +32,10 @@ const FaultDrive* rails_drive();
 /// (made like the fault drive, in test-data/posts-drive/).
 const FaultDrive* posts_drive();
 
+/// `liod-sim --route highway --seed 1 --duration 12 --max-speed 12 --static-start`: 3 s at rest
+/// between guard rails, then off (made like the fault drive, in test-data/rest-drive/).
+const FaultDrive* rest_drive();
+
 /// `liod-sim --route highway --seed 7 --duration 12 --max-speed 12`: a rolling start at 12 m/s
 /// past a car parked on the shoulder (made like the fault drive, in test-data/parked-car-drive/).
 const FaultDrive* parked_car_drive();

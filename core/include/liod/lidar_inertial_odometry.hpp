@@ -148,7 +148,8 @@ class LidarInertialOdometry {
   struct SpeedSearch {
     double first_end_time = 0.0;
     bool first_pair_standstill = false;  // its best speed with all of the structure, below 1 m/s
-    Scan previous;
+    bool evidence_standstill = false;    // the best speed off the rails so far, below 1 m/s
+    std::vector<Scan> held;  // every scan since the first (at most kMaxSpeedSearch_s of them)
     std::vector<StructurePoints> structure;
     std::vector<double> evidence;
   };

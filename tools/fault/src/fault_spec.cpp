@@ -93,6 +93,11 @@ Fault parse_kind(const std::string& kind, Keys& k) {
   if (kind == "duplicate") return DuplicatePackets{k.percent("percent", 1.0), k.window()};
   if (kind == "lidar-stop") return StopLidar{k.bounded_window()};
   if (kind == "imu-cut") return CutImu{k.bounded_window()};
+  if (kind == "rock") {
+    RockImu f{k.bounded_window(), k.number("rate", 0.02)};
+    if (!(f.rate_rad_s > 0.0 && f.rate_rad_s <= 1.0)) k.fail("'rate' must be in (0, 1] rad/s");
+    return f;
+  }
   if (kind == "clock-jump") {
     const std::string sensor = k.text("sensor", "lidar");
     if (sensor != "lidar" && sensor != "imu") k.fail("'sensor' must be lidar or imu");
@@ -130,7 +135,7 @@ Fault parse_fault(std::string_view text) {
 
 std::string fault_syntax() {
   return "drop:percent=P[,from=S,to=S]; reorder:percent=P[,max-shift=N,from=S,to=S]; "
-         "duplicate:percent=P[,from=S,to=S]; lidar-stop:from=S,to=S; imu-cut:from=S,to=S; "
+         "duplicate:percent=P[,from=S,to=S]; lidar-stop:from=S,to=S; imu-cut:from=S,to=S; rock:from=S,to=S[,rate=R]; "
          "clock-jump:sensor=lidar|imu,at=S,by=S; corrupt:mode=zero|max|garbage[,percent=P,from=S,to=S]; "
          "ground-only:from=S,to=S[,max-z=M,max-range=M]; cut-start:at=S";
 }

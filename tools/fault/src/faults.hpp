@@ -22,5 +22,6 @@ std::string apply(const GroundOnly& f, Recording& r, Rng& rng);
 std::string apply(const ClockJump& f, Recording& r, Rng& rng);
 // imu_faults.cpp
 std::string apply(const CutImu& f, Recording& r, Rng& rng);
+std::string apply(const RockImu& f, Recording& r, Rng& rng);
 
 }  // namespace liod::fault

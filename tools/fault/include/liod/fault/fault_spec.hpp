@@ -43,6 +43,14 @@ struct StopLidar {
 struct CutImu {
   Window window;
 };
+/// In the window the body rocks on its springs as it does at rest when a door shuts or someone
+/// climbs in: pitch and roll oscillate at 1.6 and 1.9 Hz (a car's body modes) with a peak angular
+/// rate of `rate_rad_s` each. The gyro reads the rates, the accelerometer gravity tilted by the
+/// angles; the LiDAR is left as it was (the angles stay below 2 mrad).
+struct RockImu {
+  Window window;
+  double rate_rad_s = 0.02;
+};
 enum class Sensor { Lidar, Imu };
 /// From `at_s` on, the sensor's clock reads `by_s` seconds more (negative: less). LiDAR: the
 /// MSOP header time (arrival times are the host's and stay). IMU: the sample stamps; samples
@@ -78,8 +86,8 @@ struct CutStart {
   double at_s = 0.0;
 };
 
-using Fault = std::variant<DropPackets, ReorderPackets, DuplicatePackets, StopLidar, CutImu, ClockJump, CorruptPoints,
-                           GroundOnly, CutStart>;
+using Fault = std::variant<DropPackets, ReorderPackets, DuplicatePackets, StopLidar, CutImu, RockImu, ClockJump,
+                           CorruptPoints, GroundOnly, CutStart>;
 
 /// Parses the text form; throws std::invalid_argument naming the offending part.
 [[nodiscard]] Fault parse_fault(std::string_view text);
