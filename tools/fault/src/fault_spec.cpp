@@ -94,7 +94,9 @@ Fault parse_kind(const std::string& kind, Keys& k) {
   if (kind == "lidar-stop") return StopLidar{k.bounded_window()};
   if (kind == "imu-cut") return CutImu{k.bounded_window()};
   if (kind == "rock") {
-    RockImu f{k.bounded_window(), k.number("rate", 0.02)};
+    RockImu f;
+    f.window = k.bounded_window();
+    f.rate_rad_s = k.number("rate", f.rate_rad_s);
     if (!(f.rate_rad_s > 0.0 && f.rate_rad_s <= 1.0)) k.fail("'rate' must be in (0, 1] rad/s");
     return f;
   }
