@@ -42,9 +42,16 @@ constexpr std::size_t kSpeedSearchMemory = 4;
 // each hypothesis's union anew, and a dense town start (5,800 a scan) took 0.7-1.7 s a call, which
 // a standstill repeats until the IMU has had its say (half a second). Sparse roads hold 15-40.
 constexpr std::size_t kMaxSearchPointsPerScan = 2500;
-// Without that much structure off the rails for so long, the first pair's standstill stands if it
-// saw one, else the speed is left to the LiDAR's registration under the wide prior.
+// Without that much structure off the rails for so long, the first scans' standstill stands if
+// they saw one, else the speed is left to the LiDAR's registration under the wide prior.
 constexpr double kMaxSpeedSearch_s = 2.0;
+// The speed with all of the structure is decided on this scan (0 the first), from its overlap and
+// that of each scan before it with their predecessors, summed. From the first pair alone (1) it
+// aliased: 32 highway starts at 10-17 m/s, 4 s each, had two at 2.2 m/s and 1.9 m/s for 15 m/s
+// (17 m and 19 m ATE) and one 11 % low; with the second scan also scored against the first, the
+// worst speed was 5 % off and the worst ATE 0.85 m (docs/odometry.md, 2026-12-02). Three pairs
+// (3) let a standstill that rides along with the sensor gather weight on one start (2.7 m).
+constexpr std::size_t kAllStructureScans = 2;
 // Below this a pair's best speed may be the rails' standstill (off_along_track_lines).
 constexpr double kStandstillSpeed = 1.0;
 // Beam calibration: ground is a plane within 26 deg of level; a residual beyond 10 cm is a wrong
@@ -420,8 +427,8 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
     std::optional<double> speed;
     if (!imu_gap && !timed_out) speed = search_speed(scan);
     if (speed || imu_gap || timed_out) {
-      // Known at last, or not to be known: then a first pair that saw a standstill in all of its
-      // structure is taken at its word (a car waiting beside a rail) unless the body rocks on its
+      // Known at last, or not to be known: then first scans that saw a standstill in all of their
+      // structure are taken at their word (a car waiting beside a rail) unless the body rocks on its
       // springs (body_rocking.hpp), else the wide prior stays and
       // the LiDAR decides. The state is carried by the IMU to the scan before this one, which
       // becomes the first keyframe. Not through all of the scans so far: with the speed this
@@ -430,11 +437,11 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
       // registered from the first scan on: it may have waited up to kMaxSpeedSearch_s for the
       // body to stop rocking, and the IMU alone, its gyro bias taken from a rocking body, would
       // have tilted the first keyframe (highway 60 s static start rocked for 2.5 s: 6.4 m ATE;
-      // from the first scan 0.47 m). A rocking body overrules the first pair's standstill, which
-      // may be the rails' (a moving car's first pair between rails sees one too), not the
+      // from the first scan 0.47 m). A rocking body overrules the first scans' standstill, which
+      // may be the rails' (a moving car's first scans between rails see one too), not the
       // standstill off the rails.
       if (!speed && (speed_search_->evidence_standstill ||
-                     (speed_search_->first_pair_standstill && body_motion_until(end) != BodyMotion::kRocking))) {
+                     (speed_search_->all_structure_standstill && body_motion_until(end) != BodyMotion::kRocking))) {
         speed = 0.0;
       }
       if (speed) start_at_speed(*speed);
@@ -484,15 +491,17 @@ LidarInertialOdometry::StructurePoints LidarInertialOdometry::vertical_structure
       thinned_levelled.push_back(levelled[i]);
     }
   }
-  StructurePoints out;
-  for (const auto i : thinned) out.all.push_back(candidates[i]);
-  const Eigen::Vector3d forward = state_.rotation * o.forward_axis;
-  const auto off_lines = off_along_track_lines(thinned_levelled, forward.head<2>(), AlongTrackLineParams{});
   // Every stride-th in sweep order, evenly round the scan, within the budget.
-  const std::size_t stride = (off_lines.size() + kMaxSearchPointsPerScan - 1) / kMaxSearchPointsPerScan;
-  for (std::size_t k = 0; k < off_lines.size(); k += std::max<std::size_t>(stride, 1)) {
-    out.off_lines.push_back(candidates[thinned[off_lines[k]]]);
-  }
+  auto within_budget = [&](const std::vector<std::size_t>& indices, std::vector<TimedPoint>& out) {
+    const std::size_t stride = std::max<std::size_t>((indices.size() + kMaxSearchPointsPerScan - 1) / kMaxSearchPointsPerScan, 1);
+    for (std::size_t k = 0; k < indices.size(); k += stride) out.push_back(candidates[thinned[indices[k]]]);
+  };
+  StructurePoints out;
+  std::vector<std::size_t> every(thinned.size());
+  for (std::size_t k = 0; k < every.size(); ++k) every[k] = k;
+  within_budget(every, out.all);
+  const Eigen::Vector3d forward = state_.rotation * o.forward_axis;
+  within_budget(off_along_track_lines(thinned_levelled, forward.head<2>(), AlongTrackLineParams{}), out.off_lines);
   return out;
 }
 
@@ -535,31 +544,45 @@ std::optional<double> LidarInertialOdometry::search_speed(const Scan& scan) {
     }
     return FootprintOverlap(earlier, kFootprintRadius_m).score(placed(search.structure[k].*points, world));
   };
+  // Every scan's overlap with those before it, all placed by one hypothesis's poses.
+  auto score_since_first = [&](const PoseTable& world, std::vector<TimedPoint> StructurePoints::*points) {
+    double sum = 0.0;
+    for (std::size_t k = 1; k < search.structure.size(); ++k) sum += score_against_earlier(world, k, points);
+    return sum;
+  };
   GridSearchParams speeds;
   speeds.min = -10.0;  // reversing
   speeds.max = 50.0;
   speeds.coarse_step = 0.5;
   speeds.fine_step = 0.05;
   const std::size_t newest = search.structure.size() - 1;
-  if (newest == 1) {
+  const std::vector<double> hypotheses = coarse_grid(speeds);
+  if (newest <= kAllStructureScans) {
     // All the structure: the rails along a road, their posts and ends, tell the speed of a moving
     // vehicle best (the highway's drives: 1-3 % against up to 10 % without the rails).
-    const GridSearchResult found =
-        grid_search([&](double speed) { return score_against_earlier(placement(speed), newest, &StructurePoints::all); },
-                    speeds);
-    if (found.score >= kMinSpeedScore) {
-      if (std::abs(found.value) >= kStandstillSpeed) return found.value;
-      search.first_pair_standstill = true;
+    search.evidence_all.resize(hypotheses.size(), 0.0);
+    for (std::size_t i = 0; i < hypotheses.size(); ++i) {
+      search.evidence_all[i] += score_against_earlier(placement(hypotheses[i]), newest, &StructurePoints::all);
+    }
+    if (newest == kAllStructureScans) {
+      const auto best = std::max_element(search.evidence_all.begin(), search.evidence_all.end());
+      const GridSearchResult found = refine_around(
+          [&](double speed) { return score_since_first(placement(speed), &StructurePoints::all); },
+          hypotheses[static_cast<std::size_t>(best - search.evidence_all.begin())], speeds);
+      if (found.score >= kMinSpeedScore) {
+        if (std::abs(found.value) >= kStandstillSpeed) return found.value;
+        search.all_structure_standstill = true;
+      }
     }
   }
   // A standstill, or not enough to tell: the rails' footprints move with the sensor and vote for
   // a standstill that may not be (off_along_track_lines), so without them, and summed over the
   // scans until enough structure has passed (one scan on a highway often holds a post or two).
-  const std::vector<double> hypotheses = coarse_grid(speeds);
   search.evidence.resize(hypotheses.size(), 0.0);
   for (std::size_t i = 0; i < hypotheses.size(); ++i) {
     search.evidence[i] += score_against_earlier(placement(hypotheses[i]), newest, &StructurePoints::off_lines);
   }
+  if (newest < kAllStructureScans) return std::nullopt;
   const auto best = std::max_element(search.evidence.begin(), search.evidence.end());
   if (*best < kMinSpeedScore) return std::nullopt;
   const double centre = hypotheses[static_cast<std::size_t>(best - search.evidence.begin())];
@@ -571,16 +594,8 @@ std::optional<double> LidarInertialOdometry::search_speed(const Scan& scan) {
   // the time limit.
   search.evidence_standstill = std::abs(centre) < kStandstillSpeed;
   if (search.evidence_standstill && body_motion_until(scan_end_time(scan)) != BodyMotion::kStill) return std::nullopt;
-  return refine_around(
-             [&](double speed) {
-               const PoseTable world = placement(speed);  // once for all the scans
-               double sum = 0.0;
-               for (std::size_t k = 1; k <= newest; ++k) {
-                 sum += score_against_earlier(world, k, &StructurePoints::off_lines);
-               }
-               return sum;
-             },
-             centre, speeds)
+  return refine_around([&](double speed) { return score_since_first(placement(speed), &StructurePoints::off_lines); },
+                       centre, speeds)
       .value;
 }
 

@@ -96,6 +96,10 @@ const FaultDrive* rest_drive() {
   return simulated_drive("rest-drive", "--route highway --seed 1 --duration 12 --max-speed 12 --static-start");
 }
 
+const FaultDrive* aliasing_posts_drive() {
+  return simulated_drive("aliasing-posts-drive", "--route highway --seed 108 --duration 6 --max-speed 15");
+}
+
 const FaultDrive* parked_car_drive() {
   return simulated_drive("parked-car-drive", "--route highway --seed 7 --duration 12 --max-speed 12");
 }

@@ -36,6 +36,10 @@ const FaultDrive* posts_drive();
 /// between guard rails, then off (made like the fault drive, in test-data/rest-drive/).
 const FaultDrive* rest_drive();
 
+/// `liod-sim --route highway --seed 108 --duration 6 --max-speed 15`: a rolling start at 15 m/s
+/// whose first two scans alone overlap best at 2-3 m/s (speed_search).
+const FaultDrive* aliasing_posts_drive();
+
 /// `liod-sim --route highway --seed 7 --duration 12 --max-speed 12`: a rolling start at 12 m/s
 /// past a car parked on the shoulder (made like the fault drive, in test-data/parked-car-drive/).
 const FaultDrive* parked_car_drive();

@@ -147,11 +147,12 @@ class LidarInertialOdometry {
   // hypothesis.
   struct SpeedSearch {
     double first_end_time = 0.0;
-    bool first_pair_standstill = false;  // its best speed with all of the structure, below 1 m/s
+    bool all_structure_standstill = false;  // the first scans' best speed with all of the structure, below 1 m/s
     bool evidence_standstill = false;    // the best speed off the rails so far, below 1 m/s
     std::vector<Scan> held;  // every scan since the first (at most kMaxSpeedSearch_s of them)
     std::vector<StructurePoints> structure;
-    std::vector<double> evidence;
+    std::vector<double> evidence;      // off the rails, from the second scan on
+    std::vector<double> evidence_all;  // all of the structure, up to the kAllStructureScans-th scan
   };
   std::optional<SpeedSearch> speed_search_;
   // The forward accelerometer bias is kept out of the next LiDAR update: at a rolling start, and
