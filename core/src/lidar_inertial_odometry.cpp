@@ -47,10 +47,10 @@ constexpr std::size_t kMaxSearchPointsPerScan = 2500;
 constexpr double kMaxSpeedSearch_s = 2.0;
 // The speed with all of the structure is decided on this scan (0 the first), from its overlap and
 // that of each scan before it with their predecessors, summed. From the first pair alone (1) it
-// aliased: 32 highway starts at 10-17 m/s, 4 s each, had two at 2.2 m/s and 1.9 m/s for 15 m/s
-// (17 m and 19 m ATE) and one 11 % low; with the second scan also scored against the first, the
-// worst speed was 5 % off and the worst ATE 0.85 m (docs/odometry.md, 2026-12-02). Three pairs
-// (3) let a standstill that rides along with the sensor gather weight on one start (2.7 m).
+// aliased: 32 highway starts at 10-17 m/s, 4 s each, had two at ~2 m/s for 15 and 17 m/s (17 m
+// and 19 m ATE) and one 11 % low; with the third scan also scored against both before it (2), the
+// worst speed was 5 % off and the worst ATE 0.85 m (docs/odometry.md, 2026-12-02). Deciding on the
+// fourth (3) let a standstill that rides along with the sensor gather weight on one start (2.7 m).
 constexpr std::size_t kAllStructureScans = 2;
 // Below this a pair's best speed may be the rails' standstill (off_along_track_lines).
 constexpr double kStandstillSpeed = 1.0;
