@@ -45,9 +45,10 @@ inline std::vector<TumPose> read_tum(const std::filesystem::path& p) {
 
 /// The reference: a replay as fast as possible (computed once).
 inline const std::filesystem::path& reference_replay(const std::filesystem::path& drive) {
-  static std::filesystem::path dir;
-  if (dir.empty()) {
-    dir = test::temp_dir("reference");
+  static const test::ScratchDir dir("reference");
+  static bool done = false;
+  if (!done) {
+    done = true;
     ReplayOptions o;
     o.pcap = (drive / "lidar.pcap").string();
     o.imu_csv = (drive / "imu.csv").string();
@@ -56,7 +57,7 @@ inline const std::filesystem::path& reference_replay(const std::filesystem::path
     std::ostringstream out;
     if (run_replay(drive_config(drive), o, out) != 0) ADD_FAILURE() << out.str();
   }
-  return dir;
+  return dir.path();
 }
 
 }  // namespace liod::test

@@ -13,20 +13,19 @@
 namespace liod::test {
 
 inline const std::filesystem::path* sim_drive() {
-  static std::filesystem::path dir;
+  static const ScratchDir dir("simdrive");
   static bool tried = false;
   static bool ok = false;
   if (!tried) {
     tried = true;
     const auto sim = binary_dir() / "bin" / "liod-sim";
     if (std::filesystem::exists(sim)) {
-      dir = temp_dir("simdrive");
       const std::string cmd = "timeout 600 " + sim.string() + " --route urban --seed 3 --duration 8 --max-speed 12 --out " +
                               dir.string() + " > " + (dir / "sim.log").string() + " 2>&1";
       ok = std::system(cmd.c_str()) == 0 && std::filesystem::exists(dir / "lidar.pcap");
     }
   }
-  return ok ? &dir : nullptr;
+  return ok ? &dir.path() : nullptr;
 }
 
 }  // namespace liod::test

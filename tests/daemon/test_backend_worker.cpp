@@ -28,7 +28,8 @@ void touch(const std::filesystem::path& file) { std::ofstream(file) << "keyframe
 
 TEST(BackendWorker, RemovesScratchOfKilledProcessesOnly) {
   namespace fs = std::filesystem;
-  const fs::path state = test::temp_dir("backend-scratch");
+  const test::ScratchDir scratch("backend-scratch");
+  const fs::path& state = scratch.path();
   const fs::path dead = state / ("scratch-" + std::to_string(finished_pid()));
   const fs::path alive = state / ("scratch-" + std::to_string(::getppid()));  // the test runner
   const fs::path unrelated = state / "scratch-notes";

@@ -96,7 +96,7 @@ void expect_scan_log_state_matches_trajectory(const std::filesystem::path& log, 
 TEST(Pipeline, ReplayIsDeterministic) {
   LIOD_REQUIRE_SIM_DRIVE(drive);
   const auto& ref = reference_replay(*drive);
-  const auto dir = test::temp_dir("again");
+  const test::ScratchDir dir("again");
   ReplayOptions o;
   o.pcap = (*drive / "lidar.pcap").string();
   o.imu_csv = (*drive / "imu.csv").string();
@@ -119,7 +119,7 @@ TEST(Pipeline, ReplayIsDeterministic) {
 TEST(Pipeline, StuckClientDoesNotAffectOdometry) {
   LIOD_REQUIRE_SIM_DRIVE(drive);
   const auto& ref = reference_replay(*drive);
-  const auto dir = test::temp_dir("stuckpipe");
+  const test::ScratchDir dir("stuckpipe");
   Config config = drive_config(*drive);
   config.pose_socket.client_buffer_bytes = 16384;
   config.pose_socket.stuck_timeout_s = 1.0;
@@ -169,7 +169,7 @@ class LiveDaemon {
  public:
   LiveDaemon(const std::filesystem::path& drive, const std::string& name, double pace, int port_slot,
              const std::string& record_dir = "")
-      : dir(test::temp_dir(name)), sock((dir / "pose.sock").string()),
+      : dir(name), sock((dir / "pose.sock").string()),
         msop(static_cast<std::uint16_t>(30000 + static_cast<int>(::getpid() % 2500) * 8 + port_slot * 2)),
         difop(static_cast<std::uint16_t>(msop + 1)), drive_(drive), record_dir_(record_dir) {
     std::ofstream cfg(config_file());
@@ -263,7 +263,7 @@ class LiveDaemon {
     return testing::AssertionSuccess();
   }
 
-  const std::filesystem::path dir;
+  const test::ScratchDir dir;
   const std::string sock;
   const std::uint16_t msop, difop;
   std::unique_ptr<PoseClient> client;
@@ -322,7 +322,7 @@ TEST(Record, RecordingReplaysToTheSourcePoses) {
   if (!std::filesystem::exists(test::binary_dir() / "bin" / "liod")) GTEST_SKIP() << "liod binary not built";
   const auto& ref = reference_replay(*drive);
   const std::size_t ref_scans = read_tum(ref / "scan.tum").size();
-  const auto rec = test::temp_dir("recording");
+  const test::ScratchDir rec("recording");
   LiveDaemon live(*drive, "record", 5.0, 2, (rec / "drive").string());
   ASSERT_TRUE(live.start());
   const std::size_t sent = live.send_and_collect(5.0, ref_scans);

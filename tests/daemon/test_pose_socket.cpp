@@ -113,7 +113,7 @@ TEST(PoseProtocol, RequestAtTheEndOfAnOverlongLineIsIgnored) {
 }
 
 TEST(PoseSocket, ServesBinaryAndJsonClients) {
-  const auto dir = test::temp_dir("pose");
+  const test::ScratchDir dir("pose");
   const std::string path = (dir / "pose.sock").string();
   PoseSocketConfig cfg;
   PoseServer server(path, cfg);
@@ -153,7 +153,7 @@ TEST(PoseSocket, ServesBinaryAndJsonClients) {
 // A client that never reads: broadcasting never blocks, the reading client gets every message,
 // the stuck one skips messages and is disconnected after stuck_timeout_s.
 TEST(PoseSocket, StuckClientIsSkippedThenDroppedOthersServed) {
-  const auto dir = test::temp_dir("stuck");
+  const test::ScratchDir dir("stuck");
   const std::string path = (dir / "pose.sock").string();
   PoseSocketConfig cfg;
   cfg.client_buffer_bytes = 64 * 1024;
@@ -207,7 +207,7 @@ TEST(PoseSocket, StuckClientIsSkippedThenDroppedOthersServed) {
 }
 
 TEST(PoseSocket, ReplacesStaleSocketFileAndCleansUp) {
-  const auto dir = test::temp_dir("stale");
+  const test::ScratchDir dir("stale");
   const std::string path = (dir / "pose.sock").string();
   { PoseServer first(path, PoseSocketConfig{}); }
   EXPECT_FALSE(std::filesystem::exists(path));

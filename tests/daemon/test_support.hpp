@@ -1,5 +1,5 @@
 #pragma once
-// Helpers shared by the daemon tests: temporary directories, the shared data folder, bounded waits.
+// Helpers shared by the daemon tests: scratch directories, the shared data folder, bounded waits.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -8,14 +8,9 @@
 #include <string>
 #include <thread>
 
-namespace liod::test {
+#include "scratch_dir.hpp"
 
-inline std::filesystem::path temp_dir(const std::string& name) {
-  auto dir = std::filesystem::temp_directory_path() / ("liod-test-" + name + "-" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
-}
+namespace liod::test {
 
 inline std::filesystem::path shared_dir() { return LIOD_SHARED_DIR; }
 inline std::filesystem::path binary_dir() { return LIOD_BINARY_DIR; }

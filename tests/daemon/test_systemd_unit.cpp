@@ -25,7 +25,7 @@ TEST(SystemdUnit, SystemdAnalyzeVerify) {
   if (std::system("command -v systemd-analyze >/dev/null 2>&1") != 0) GTEST_SKIP() << "systemd-analyze not installed";
   // The unit names /usr/bin/liod; verify checks that ExecStart's binary exists, so verify a copy
   // pointing at the build tree's binary.
-  const auto dir = liod::test::temp_dir("unit");
+  const liod::test::ScratchDir dir("unit");
   std::ifstream in(std::string(LIOD_SOURCE_DIR) + "/systemd/liod.service");
   std::ostringstream s;
   s << in.rdbuf();

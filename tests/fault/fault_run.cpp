@@ -1,7 +1,5 @@
 #include "fault_run.hpp"
 
-#include <unistd.h>
-
 #include <chrono>
 #include <memory>
 #include <thread>
@@ -9,31 +7,9 @@
 #include "liod/config.hpp"
 #include "liod/daemon/sources.hpp"
 #include "liod/fault/apply_fault.hpp"
+#include "scratch_dir.hpp"
 
 namespace liod::test {
-namespace {
-
-/// A directory removed with everything in it when the run is over.
-class ScratchDir {
- public:
-  explicit ScratchDir(const std::string& name)
-      : path_(std::filesystem::temp_directory_path() / ("liod-fault-" + name + "-" + std::to_string(::getpid()))) {
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~ScratchDir() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-  }
-  ScratchDir(const ScratchDir&) = delete;
-  ScratchDir& operator=(const ScratchDir&) = delete;
-  [[nodiscard]] const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
-
-}  // namespace
 
 std::vector<pose::PoseMessage> FaultRun::of_type(pose::MessageType type) const {
   std::vector<pose::PoseMessage> out;

@@ -1,0 +1,39 @@
+#pragma once
+// A test's scratch directory: fresh under the system's temporary directory, and removed with
+// everything in it when it goes out of scope (a function-local static one when the test program
+// exits), so that test runs leave nothing behind in /tmp.
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+#include <system_error>
+
+namespace liod::test {
+
+class ScratchDir {
+ public:
+  /// <temp>/liod-test-<name>-<pid>; emptied first if a killed run left it.
+  explicit ScratchDir(const std::string& name)
+      : path_(std::filesystem::temp_directory_path() / ("liod-test-" + name + "-" + std::to_string(::getpid()))) {
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+  }
+  ~ScratchDir() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path_, ignored);
+  }
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  ScratchDir(ScratchDir&&) = delete;
+  ScratchDir& operator=(ScratchDir&&) = delete;
+
+  // No conversion to a path: a temporary converted to one would remove the directory at once.
+  [[nodiscard]] const std::filesystem::path& path() const { return path_; }
+  [[nodiscard]] std::filesystem::path operator/(const std::filesystem::path& name) const { return path_ / name; }
+  [[nodiscard]] std::string string() const { return path_.string(); }
+
+ private:
+  std::filesystem::path path_;
+};
+
+}  // namespace liod::test
