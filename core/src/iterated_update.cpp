@@ -42,19 +42,8 @@ template <typename Correspond>
 void search_correspondences(const std::vector<Eigen::Vector3d>& points_world, const LocalMap& map,
                             const UpdateParams& params, Correspond correspond, Correspondences& cache) {
   cache.resize(points_world.size());
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> by_voxel(points_world.size());
-  for (std::size_t i = 0; i < points_world.size(); ++i) {
-    const VoxelKey key = map.voxel_key(points_world[i]);
-    // 21 bits an axis: the order only groups the queries, wrapping far away costs nothing.
-    constexpr std::uint64_t kMask = (1U << 21) - 1;
-    const std::uint64_t packed = (static_cast<std::uint64_t>(static_cast<std::uint32_t>(key.x)) & kMask) << 42 |
-                                 (static_cast<std::uint64_t>(static_cast<std::uint32_t>(key.y)) & kMask) << 21 |
-                                 (static_cast<std::uint64_t>(static_cast<std::uint32_t>(key.z)) & kMask);
-    by_voxel[i] = {packed, static_cast<std::uint32_t>(i)};
-  }
-  std::sort(by_voxel.begin(), by_voxel.end());
   LocalMap::NeighbourSearch neighbours(map);
-  for (const auto& [key, i] : by_voxel) {
+  for (const std::uint32_t i : map.voxel_order(points_world)) {
     cache[i] = correspond(neighbours, points_world[i], params.correspondence);
   }
 }

@@ -344,22 +344,35 @@ void LidarInertialOdometry::deskew_features(const Scan& scan, const ScanFeatures
 // would move with its beam's elevation. Ground only: there an elevation offset moves a point
 // across the surface (along the ray on a wall it hardly does) and the map is densest.
 void LidarInertialOdometry::learn_beam_elevations(const Features& features) {
-  LocalMap::NeighbourSearch search(plane_map_);
   const Eigen::Matrix3d world_from_lidar = state_.rotation * lidar_to_imu_.rotation.toRotationMatrix();
   const Eigen::Vector3d up = -state_.gravity.normalized();
   const double noise = config_.odometry.lidar_noise_m;
+  const double max_elevation_slope = std::tan(kBeamMaxElevationRad);
+  // The ground points beyond kBeamMinRangeM, every kBeamPointStride-th of each beam.
+  std::vector<std::size_t> picked;
+  std::vector<Eigen::Vector3d> world;
   std::vector<std::uint32_t> seen(beam_calibration_.beams(), 0);
   for (std::size_t i = 0; i < features.map_planes.size(); ++i) {
     const RingPoint& source = features.map_plane_sources[i];
     const double horizontal = std::hypot(source.lidar.x(), source.lidar.y());
-    const double elevation = std::atan2(source.lidar.z(), horizontal);
-    if (horizontal < kBeamMinRangeM || elevation > kBeamMaxElevationRad) continue;
+    if (horizontal < kBeamMinRangeM || source.lidar.z() > horizontal * max_elevation_slope) continue;
     if (source.ring >= seen.size() || seen[source.ring]++ % kBeamPointStride != 0) continue;  // add() would drop it
-    const Eigen::Vector3d world = state_.rotation * features.map_planes[i] + state_.position;
-    const auto plane = plane_correspondence(search, world, update_params_.correspondence);
+    picked.push_back(i);
+    world.push_back(state_.rotation * features.map_planes[i] + state_.position);
+  }
+  // Their planes searched voxel by voxel (as the registration's), added in sweep order.
+  std::vector<std::optional<LinearResidual>> planes(picked.size());
+  LocalMap::NeighbourSearch search(plane_map_);
+  for (const std::uint32_t k : plane_map_.voxel_order(world)) {
+    planes[k] = plane_correspondence(search, world[k], update_params_.correspondence);
+  }
+  for (std::size_t k = 0; k < picked.size(); ++k) {
+    const auto& plane = planes[k];
     if (!plane || std::abs(plane->normal.dot(up)) < kGroundNormalCos) continue;
-    const double residual = plane->evaluate(world);
+    const double residual = plane->evaluate(world[k]);
     if (std::abs(residual) > kBeamResidualGateM) continue;
+    const RingPoint& source = features.map_plane_sources[picked[k]];
+    const double elevation = std::atan2(source.lidar.z(), std::hypot(source.lidar.x(), source.lidar.y()));
     const double jacobian =
         plane->normal.dot(world_from_lidar * BeamElevationCalibration::elevation_derivative(source.lidar));
     beam_calibration_.add(source.ring, elevation, jacobian, residual, noise * noise * plane->variance_scale);

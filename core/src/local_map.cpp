@@ -130,6 +130,23 @@ void LocalMap::remove_keyframe(const std::vector<Eigen::Vector3d>& points, std::
   }
 }
 
+std::vector<std::uint32_t> LocalMap::voxel_order(const std::vector<Eigen::Vector3d>& queries) const {
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> by_voxel(queries.size());
+  for (std::size_t i = 0; i < queries.size(); ++i) {
+    const VoxelKey key = voxel_key(queries[i]);
+    // 21 bits an axis: the order only groups the queries, wrapping far away costs nothing.
+    constexpr std::uint64_t kMask = (1U << 21) - 1;
+    const std::uint64_t packed = (static_cast<std::uint64_t>(static_cast<std::uint32_t>(key.x)) & kMask) << 42 |
+                                 (static_cast<std::uint64_t>(static_cast<std::uint32_t>(key.y)) & kMask) << 21 |
+                                 (static_cast<std::uint64_t>(static_cast<std::uint32_t>(key.z)) & kMask);
+    by_voxel[i] = {packed, static_cast<std::uint32_t>(i)};
+  }
+  std::sort(by_voxel.begin(), by_voxel.end());
+  std::vector<std::uint32_t> order(queries.size());
+  for (std::size_t i = 0; i < by_voxel.size(); ++i) order[i] = by_voxel[i].second;
+  return order;
+}
+
 int LocalMap::nearest(const Eigen::Vector3d& query, int k, double max_distance,
                       std::array<Eigen::Vector3d, kMaxNeighbours>& out) const {
   return NeighbourSearch(*this).nearest(query, k, max_distance, out);

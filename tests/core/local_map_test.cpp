@@ -33,6 +33,33 @@ TEST(LocalMap, NearestNeighboursMatchBruteForce) {
   }
 }
 
+TEST(LocalMap, VoxelOrderGroupsQueriesByVoxelAndAnswersThemAlike) {
+  liod::LocalMap map(1.0, liod::LocalMap::kMaxPointsPerVoxel, 0.0);
+  map.add(random_cloud(5000, 3, 10.0), 0);
+  const auto queries = random_cloud(400, 4, 9.0);
+  const auto order = map.voxel_order(queries);
+  // A permutation in which each voxel's queries come in one run.
+  std::vector<std::uint32_t> sorted = order;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t i = 0; i < sorted.size(); ++i) ASSERT_EQ(sorted[i], i);
+  std::vector<liod::VoxelKey> finished;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const auto key = map.voxel_key(queries[order[i]]);
+    if (i > 0 && key == map.voxel_key(queries[order[i - 1]])) continue;
+    EXPECT_TRUE(std::none_of(finished.begin(), finished.end(), [&](const liod::VoxelKey& k) { return k == key; }));
+    finished.push_back(key);
+  }
+  // One search taken in that order answers each query as a fresh one does.
+  liod::LocalMap::NeighbourSearch search(map);
+  for (const auto i : order) {
+    std::array<Eigen::Vector3d, liod::LocalMap::kMaxNeighbours> shared;
+    std::array<Eigen::Vector3d, liod::LocalMap::kMaxNeighbours> fresh;
+    const int n = search.nearest(queries[i], 8, 1.0, shared);
+    ASSERT_EQ(n, map.nearest(queries[i], 8, 1.0, fresh));
+    for (int j = 0; j < n; ++j) EXPECT_EQ(shared[static_cast<std::size_t>(j)], fresh[static_cast<std::size_t>(j)]);
+  }
+}
+
 TEST(LocalMap, SpacingAndCapacityLimitDensity) {
   liod::LocalMap map(1.0, 3, 0.2);
   map.add({{0.1, 0.1, 0.1}, {0.15, 0.1, 0.1}, {0.5, 0.5, 0.5}, {0.9, 0.9, 0.9}, {0.9, 0.1, 0.1}}, 0);

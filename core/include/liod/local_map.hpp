@@ -37,6 +37,9 @@ class LocalMap {
 
   /// The voxel a point falls in: queries sorted by it share their look-ups in a NeighbourSearch.
   VoxelKey voxel_key(const Eigen::Vector3d& p) const { return voxel_of(p, inverse_voxel_size_); }
+  /// The queries' indices sorted by their voxel: taken in this order, a NeighbourSearch answers
+  /// each from the look-ups of the last.
+  std::vector<std::uint32_t> voxel_order(const std::vector<Eigen::Vector3d>& queries) const;
 
   /// Answers nearest() for a run of queries, keeping the voxels looked up around the last query's
   /// voxel: a scan's queries, taken voxel by voxel, skip most of their 27 hash look-ups and find
