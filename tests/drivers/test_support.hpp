@@ -3,8 +3,6 @@
 // synthetic RS-Helios packets laid out per shared/sensors/rs-helios.md, and capture files of every
 // flavour PcapReader accepts.
 
-#include <unistd.h>
-
 #include <array>
 #include <cmath>
 #include <iterator>
@@ -18,6 +16,7 @@
 #include "liod/drivers/byte_order.hpp"
 #include "liod/drivers/pcap_writer.hpp"
 #include "liod/drivers/rs_helios_model.hpp"
+#include "scratch_dir.hpp"
 
 namespace liod::drivers::test {
 
@@ -186,26 +185,7 @@ inline std::vector<std::uint8_t> pcapng(const std::vector<Record>& records, std:
   return f;
 }
 
-/// A unique scratch directory under the build tree, removed by the destructor.
-class TempDir {
- public:
-  TempDir() {
-    static int counter = 0;
-    path_ = std::filesystem::temp_directory_path() /
-            ("liod_drivers_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  [[nodiscard]] const std::filesystem::path& path() const { return path_; }
-  [[nodiscard]] std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  std::filesystem::path path_;
-};
+/// A scratch directory of its own, removed by the destructor.
+using TempDir = liod::test::ScratchDir;
 
 }  // namespace liod::drivers::test

@@ -4,6 +4,7 @@
 // exits), so that test runs leave nothing behind in /tmp.
 #include <unistd.h>
 
+#include <atomic>
 #include <filesystem>
 #include <string>
 #include <system_error>
@@ -12,9 +13,11 @@ namespace liod::test {
 
 class ScratchDir {
  public:
-  /// <temp>/liod-test-<name>-<pid>; emptied first if a killed run left it.
-  explicit ScratchDir(const std::string& name)
-      : path_(std::filesystem::temp_directory_path() / ("liod-test-" + name + "-" + std::to_string(::getpid()))) {
+  /// <temp>/liod-test-<name>-<pid>-<n>, n counting this process's scratch directories; emptied
+  /// first if a killed run left it.
+  explicit ScratchDir(const std::string& name = "scratch")
+      : path_(std::filesystem::temp_directory_path() /
+              ("liod-test-" + name + "-" + std::to_string(::getpid()) + "-" + std::to_string(next_number()))) {
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }
@@ -33,6 +36,11 @@ class ScratchDir {
   [[nodiscard]] std::string string() const { return path_.string(); }
 
  private:
+  static int next_number() {
+    static std::atomic<int> made{0};
+    return made++;
+  }
+
   std::filesystem::path path_;
 };
 
