@@ -349,7 +349,11 @@ void LidarInertialOdometry::learn_beam_elevations(const Features& features) {
   const double noise = config_.odometry.lidar_noise_m;
   const double max_elevation_slope = std::tan(kBeamMaxElevationRad);
   // The ground points beyond kBeamMinRangeM, every kBeamPointStride-th of each beam.
-  std::vector<std::size_t> picked;
+  struct Picked {
+    std::size_t index;
+    double horizontal;  // its range across the LiDAR's axis
+  };
+  std::vector<Picked> picked;
   std::vector<Eigen::Vector3d> world;
   std::vector<std::uint32_t> seen(beam_calibration_.beams(), 0);
   for (std::size_t i = 0; i < features.map_planes.size(); ++i) {
@@ -357,7 +361,7 @@ void LidarInertialOdometry::learn_beam_elevations(const Features& features) {
     const double horizontal = std::hypot(source.lidar.x(), source.lidar.y());
     if (horizontal < kBeamMinRangeM || source.lidar.z() > horizontal * max_elevation_slope) continue;
     if (source.ring >= seen.size() || seen[source.ring]++ % kBeamPointStride != 0) continue;  // add() would drop it
-    picked.push_back(i);
+    picked.push_back({i, horizontal});
     world.push_back(state_.rotation * features.map_planes[i] + state_.position);
   }
   // Their planes searched voxel by voxel (as the registration's), added in sweep order.
@@ -371,8 +375,8 @@ void LidarInertialOdometry::learn_beam_elevations(const Features& features) {
     if (!plane || std::abs(plane->normal.dot(up)) < kGroundNormalCos) continue;
     const double residual = plane->evaluate(world[k]);
     if (std::abs(residual) > kBeamResidualGateM) continue;
-    const RingPoint& source = features.map_plane_sources[picked[k]];
-    const double elevation = std::atan2(source.lidar.z(), std::hypot(source.lidar.x(), source.lidar.y()));
+    const RingPoint& source = features.map_plane_sources[picked[k].index];
+    const double elevation = std::atan2(source.lidar.z(), picked[k].horizontal);
     const double jacobian =
         plane->normal.dot(world_from_lidar * BeamElevationCalibration::elevation_derivative(source.lidar));
     beam_calibration_.add(source.ring, elevation, jacobian, residual, noise * noise * plane->variance_scale);
