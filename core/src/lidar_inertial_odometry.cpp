@@ -54,6 +54,13 @@ constexpr double kMaxSpeedSearch_s = 2.0;
 constexpr std::size_t kAllStructureScans = 2;
 // Below this a pair's best speed may be the rails' standstill (off_along_track_lines).
 constexpr double kStandstillSpeed = 1.0;
+// A standstill's evidence off the rails falls off to either side of zero; at 3 m/s it is on its
+// shoulder still. A moving car whose rings cut the rail's faces in spots fixed in the sensor's
+// frame scores a standstill too, but its true speed peaks on its own: highway seed 131 at 13 m/s,
+// 0.77-0.92 of the standstill's score over its first 2 s; rocked at rest, the highway's separate
+// peaks reach 0.2 of the standstill's, the tunnel's 0.2 (docs/odometry.md, 2026-12-02).
+constexpr double kMinMovingPeakSpeed = 3.0;
+constexpr double kMinMovingPeakShare = 0.5;
 // Beam calibration: ground is a plane within 26 deg of level; a residual beyond 10 cm is a wrong
 // match, not a millimetre beam offset. Beams below the horizon only, 8 m away or more: nearer, an
 // offset moves a point by under a millimetre (range * offset), and what matters is the far ground.
@@ -457,6 +464,9 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
       // from the first scan 0.47 m). A rocking body overrules the first scans' standstill, which
       // may be the rails' (a moving car's first scans between rails see one too), not the
       // standstill off the rails.
+      // Still rocking at the end, with the speed that peaks on its own beside the standstill:
+      // the body rocks because the car rolls (kMinMovingPeakShare).
+      if (!speed && speed_search_->evidence_standstill) speed = speed_search_->moving_peak;
       if (!speed && (speed_search_->evidence_standstill ||
                      (speed_search_->all_structure_standstill && body_motion_until(end) != BodyMotion::kRocking))) {
         speed = 0.0;
@@ -610,7 +620,16 @@ std::optional<double> LidarInertialOdometry::search_speed(const Scan& scan) {
   // rocked at rest (a door shut) keeps its standstill's lead, decided once the rocking ends or at
   // the time limit.
   search.evidence_standstill = std::abs(centre) < kStandstillSpeed;
-  if (search.evidence_standstill && body_motion_until(scan_end_time(scan)) != BodyMotion::kStill) return std::nullopt;
+  if (search.evidence_standstill && body_motion_until(scan_end_time(scan)) != BodyMotion::kStill) {
+    search.moving_peak.reset();
+    if (const auto peak = separate_peak(hypotheses, search.evidence, kMinMovingPeakSpeed, kMinMovingPeakShare)) {
+      search.moving_peak =
+          refine_around([&](double speed) { return score_since_first(placement(speed), &StructurePoints::off_lines); },
+                        hypotheses[*peak], speeds)
+              .value;
+    }
+    return std::nullopt;
+  }
   return refine_around([&](double speed) { return score_since_first(placement(speed), &StructurePoints::off_lines); },
                        centre, speeds)
       .value;

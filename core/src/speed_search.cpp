@@ -127,6 +127,19 @@ GridSearchResult refine_around(const std::function<double(double)>& score, doubl
   return result;
 }
 
+std::optional<std::size_t> separate_peak(const std::vector<double>& hypotheses, const std::vector<double>& scores,
+                                         double min_abs, double min_share) {
+  if (scores.size() != hypotheses.size() || scores.size() < 3) return std::nullopt;
+  const double highest = *std::max_element(scores.begin(), scores.end());
+  std::optional<std::size_t> peak;
+  for (std::size_t i = 1; i + 1 < scores.size(); ++i) {
+    if (std::abs(hypotheses[i]) < min_abs || scores[i] < scores[i - 1] || scores[i] < scores[i + 1]) continue;
+    if (!peak || scores[i] > scores[*peak]) peak = i;
+  }
+  if (!peak || !(scores[*peak] > 0.0) || scores[*peak] < min_share * highest) return std::nullopt;
+  return peak;
+}
+
 GridSearchResult grid_search(const std::function<double(double)>& score, const GridSearchParams& params) {
   GridSearchResult best{0.0, -std::numeric_limits<double>::infinity()};
   for (const double x : coarse_grid(params)) {

@@ -121,6 +121,34 @@ TEST(GridSearch, FindsTheGlobalMaximumAmongSideLobes) {
   EXPECT_NEAR(found.value, 14.12, 0.01);
 }
 
+TEST(GridSearch, ASeparatePeakBesideAStandstillIsFoundOnlyWhereItPeaksOnItsOwn) {
+  liod::GridSearchParams p;
+  p.min = -10.0;
+  p.max = 50.0;
+  p.coarse_step = 0.5;
+  const std::vector<double> hypotheses = liod::coarse_grid(p);
+  auto scores_of = [&](auto score) {
+    std::vector<double> out;
+    for (double x : hypotheses) out.push_back(score(x));
+    return out;
+  };
+  auto standstill = [](double x, double width) { return std::exp(-x * x / (width * width)); };
+  // Rail faces fixed in the sensor's frame score a standstill; the moving car's structure peaks
+  // at its true speed, 13 m/s, with 85 % of it.
+  const auto moving = scores_of([&](double x) { return standstill(x, 1.5) + 0.85 * std::exp(-std::pow(x - 13.0, 2)); });
+  const auto peak = liod::separate_peak(hypotheses, moving, 3.0, 0.5);
+  ASSERT_TRUE(peak.has_value());
+  EXPECT_DOUBLE_EQ(hypotheses[*peak], 13.0);
+  // At rest the score falls off on both sides; its best beyond 3 m/s is the shoulder, no peak,
+  // however wide the standstill's peak (a tunnel's walls).
+  EXPECT_FALSE(liod::separate_peak(hypotheses, scores_of([&](double x) { return standstill(x, 1.5); }), 3.0, 0.5));
+  EXPECT_FALSE(liod::separate_peak(hypotheses, scores_of([&](double x) { return standstill(x, 15.0); }), 3.0, 0.1));
+  // A bump of a fifth of the standstill's (aliased posts) is not enough.
+  const auto bump = scores_of([&](double x) { return standstill(x, 1.5) + 0.2 * std::exp(-std::pow(x - 40.0, 2)); });
+  EXPECT_FALSE(liod::separate_peak(hypotheses, bump, 3.0, 0.5));
+  EXPECT_TRUE(liod::separate_peak(hypotheses, bump, 3.0, 0.1));
+}
+
 TEST(GridSearch, RingsPullToStandstillButStructureFindsTheMotion) {
   // The second view is 1.5 m further along (15 m/s over 0.1 s). Hypotheses: the displacement.
   const auto first = sparse_road_from(0.0, 1);

@@ -100,6 +100,10 @@ const FaultDrive* aliasing_posts_drive() {
   return simulated_drive("aliasing-posts-drive", "--route highway --seed 108 --duration 6 --max-speed 15");
 }
 
+const FaultDrive* rail_faces_drive() {
+  return simulated_drive("rail-faces-drive", "--route highway --seed 131 --duration 8 --max-speed 13");
+}
+
 const FaultDrive* parked_car_drive() {
   return simulated_drive("parked-car-drive", "--route highway --seed 7 --duration 12 --max-speed 12");
 }

@@ -40,6 +40,11 @@ const FaultDrive* rest_drive();
 /// whose first two scans alone overlap best at 2-3 m/s (speed_search).
 const FaultDrive* aliasing_posts_drive();
 
+/// `liod-sim --route highway --seed 131 --duration 8 --max-speed 13`: a rolling start at 13 m/s
+/// whose rings cut the right rail's faces in spots fixed in the sensor's frame, so that even off
+/// the rails the first 2 s score a standstill best (speed_search).
+const FaultDrive* rail_faces_drive();
+
 /// `liod-sim --route highway --seed 7 --duration 12 --max-speed 12`: a rolling start at 12 m/s
 /// past a car parked on the shoulder (made like the fault drive, in test-data/parked-car-drive/).
 const FaultDrive* parked_car_drive();

@@ -299,7 +299,7 @@ TEST(FaultInjection, StartWhileMoving) {
 
 // The path a rolling start estimates from its first position on, against the truth's over the
 // same time: the speed found at the start carries into the whole drive.
-void expect_rolling_start_path(const FaultDrive& drive, const std::string& label) {
+void expect_rolling_start_path(const FaultDrive& drive, const std::string& label, double found_within_s = 1.0) {
   const auto run = run_with_faults(drive, {});
   EXPECT_TRUE(run.finished);
   EXPECT_EQ(run.error, "");
@@ -325,7 +325,7 @@ void expect_rolling_start_path(const FaultDrive& drive, const std::string& label
   // they were matched, odometry.post_edges, the first maps' ground rings pulled it down: 75.9 m
   // for 88.7 m beside the rails).
   EXPECT_NEAR(estimated, travelled, 0.03 * travelled);
-  EXPECT_LT(moving.front().time, drive.at(1.0));  // found within the first second
+  EXPECT_LT(moving.front().time, drive.at(found_within_s));
 }
 
 TEST(FaultInjection, StartWhileMovingBesideRails) {
@@ -352,6 +352,16 @@ TEST(FaultInjection, StartWhileMovingWhereTheFirstPairAliases) {
   // speed (within 5 % from -10 to 50 m/s) and best at 3 m/s; decided on that pair, the 6 s drive
   // read 26 m ATE. The third scan, scored against both before it, puts the true speed ahead.
   expect_rolling_start_path(*drive, "start where the first pair aliases");
+}
+
+TEST(FaultInjection, StartWhileMovingWhereTheRailFacesLookStill) {
+  LIOD_REQUIRE_DRIVE(drive, rail_faces_drive);
+  // Highway at 13 m/s: beside the right rail the rings cut its faces in short spots that stay put
+  // in the sensor's frame, too short to be taken for the rail, and even off the rails the first
+  // 2 s scored a standstill best (8 s drive: 23.7 m ATE). The body rocks as it rolls, so the
+  // standstill waits until the search's time limit, and there the true speed's own peak in that
+  // evidence, 0.8-0.9 of the standstill's, is taken.
+  expect_rolling_start_path(*drive, "start where the rail faces look still", 2.5);
 }
 
 TEST(FaultInjection, StartAtRestWhileTheBodyRocks) {

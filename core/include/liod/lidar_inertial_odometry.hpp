@@ -149,6 +149,7 @@ class LidarInertialOdometry {
     double first_end_time = 0.0;
     bool all_structure_standstill = false;  // the first scans' best speed with all of the structure, below 1 m/s
     bool evidence_standstill = false;    // the best speed off the rails so far, below 1 m/s
+    std::optional<double> moving_peak;   // while the body rocks: a second peak of that evidence (separate_peak)
     std::vector<Scan> held;  // every scan since the first (at most kMaxSpeedSearch_s of them)
     std::vector<StructurePoints> structure;
     std::vector<double> evidence;      // off the rails, from the second scan on

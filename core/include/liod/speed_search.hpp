@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 #include <functional>
+#include <optional>
 #include <vector>
 
 #include "liod/local_map.hpp"
@@ -76,6 +77,13 @@ std::vector<double> coarse_grid(const GridSearchParams& params);
 
 /// The best of centre and the fine grid within one coarse step either side of it.
 GridSearchResult refine_around(const std::function<double(double)>& score, double centre, const GridSearchParams& params);
+
+/// The index of the highest local maximum of scores (over the coarse grid `hypotheses`, both
+/// neighbours lower or equal) among the hypotheses at least min_abs from zero, if it reaches
+/// min_share of the highest score of all. A standstill's score falls off on either side of zero,
+/// so what peaks again away from it is something that lands on itself at that speed.
+std::optional<std::size_t> separate_peak(const std::vector<double>& hypotheses, const std::vector<double>& scores,
+                                         double min_abs, double min_share);
 
 /// Maximises score(x) over the coarse grid on [min, max], then over the fine grid around the
 /// best coarse hypothesis. Exhaustive, so that a score with several local maxima (periodic posts)
