@@ -14,20 +14,31 @@ Eigen::Matrix3d rotation_from_up(const Eigen::Vector3d& up_in_body) {
       .toRotationMatrix();
 }
 
+std::optional<Eigen::Vector3d> mean_angular_rate(const std::deque<ImuSample>& samples, double from, double to,
+                                                 std::size_t min_samples) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  std::size_t n = 0;
+  for (const auto& s : samples) {
+    if (s.time < from || s.time > to) continue;
+    sum += s.gyro;
+    ++n;
+  }
+  if (n < min_samples) return std::nullopt;
+  return sum / static_cast<double>(n);
+}
+
 std::optional<GravityAlignment> align_gravity(const std::deque<ImuSample>& samples, double from, double to,
                                               std::size_t min_samples) {
   Eigen::Vector3d accel_sum = Eigen::Vector3d::Zero();
-  Eigen::Vector3d gyro_sum = Eigen::Vector3d::Zero();
   std::size_t n = 0;
   for (const auto& s : samples) {
     if (s.time < from || s.time > to) continue;
     accel_sum += s.accel;
-    gyro_sum += s.gyro;
     ++n;
   }
-  if (n < min_samples) return std::nullopt;
+  const auto gyro_mean = mean_angular_rate(samples, from, to, min_samples);
+  if (n < min_samples || !gyro_mean) return std::nullopt;
   const Eigen::Vector3d accel_mean = accel_sum / static_cast<double>(n);
-  const Eigen::Vector3d gyro_mean = gyro_sum / static_cast<double>(n);
   double accel_var = 0.0;
   double gyro_max = 0.0;
   for (const auto& s : samples) {
@@ -41,7 +52,7 @@ std::optional<GravityAlignment> align_gravity(const std::deque<ImuSample>& sampl
   // Little vibration and no turning: standing still, or cruising straight (the IMU cannot tell
   // the two apart). Either way the mean rate is the gyro bias.
   out.steady = accel_var < 0.05 && gyro_max < 0.05;
-  out.gyro_bias = out.steady ? gyro_mean : Eigen::Vector3d::Zero();
+  out.gyro_bias = out.steady ? *gyro_mean : Eigen::Vector3d::Zero();
   return out;
 }
 

@@ -448,6 +448,7 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
     // Over an IMU gap the hypotheses' placements would rest on a held sample: decide without it.
     const bool imu_gap = !imu_gaps(imu_, state_.time, end, config_.imu.max_gap_s).empty();
     const bool timed_out = end - speed_search_->first_end_time >= kMaxSpeedSearch_s;
+    if (body_motion_until(end) == BodyMotion::kRocking) speed_search_->rocked = true;
     std::optional<double> speed;
     if (!imu_gap && !timed_out) speed = search_speed(scan);
     if (speed || imu_gap || timed_out) {
@@ -472,9 +473,11 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
         speed = 0.0;
       }
       if (speed) start_at_speed(*speed);
+      const bool rocked = speed_search_->rocked;
       std::vector<Scan> held = std::move(speed_search_->held);
       speed_search_.reset();
       const bool standstill = speed && std::abs(*speed) < kStandstillSpeed;
+      if (standstill && rocked) settle_gyro_bias_at_rest(held.front().start_time + extrinsics_.lidar_time_offset_s, end);
       for (std::size_t i = standstill ? 0 : held.size() - 1; i < held.size(); ++i) {
         OdometryResult unreported;  // the first keyframe, and the standstill's scans before this one
         process_scan(held[i], unreported);
@@ -639,6 +642,15 @@ BodyMotion LidarInertialOdometry::body_motion_until(double time) const {
   BodyRockingParams params;
   params.gyro_noise_density = config_.imu.gyro_noise_density;
   return body_motion(imu_, time, config_.odometry.up_axis, params);
+}
+
+void LidarInertialOdometry::settle_gyro_bias_at_rest(double from, double to) {
+  // The LiDAR has seen the body at rest from the first scan to this one, so the gyro's mean over
+  // that time is its bias. The start-up alignment's window (the first scan's 0.1 s when the IMU
+  // has just come up) may have caught the body rocking (someone climbing in) at a swing's peak:
+  // 0.02 rad/s taken for a bias turned the heading 23 deg over the next 20 s on the approach to a
+  // tunnel; over the whole rest the swings cancel.
+  if (const auto rate = mean_angular_rate(imu_, from, to)) state_.gyro_bias = *rate;
 }
 
 void LidarInertialOdometry::start_at_speed(double speed) {

@@ -100,6 +100,10 @@ const FaultDrive* aliasing_posts_drive() {
   return simulated_drive("aliasing-posts-drive", "--route highway --seed 108 --duration 6 --max-speed 15");
 }
 
+const FaultDrive* tunnel_rest_drive() {
+  return simulated_drive("tunnel-rest-drive", "--route tunnel --seed 1 --duration 25 --max-speed 15");
+}
+
 const FaultDrive* rail_faces_drive() {
   return simulated_drive("rail-faces-drive", "--route highway --seed 131 --duration 8 --max-speed 13");
 }

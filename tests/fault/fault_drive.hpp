@@ -36,6 +36,10 @@ const FaultDrive* posts_drive();
 /// between guard rails, then off (made like the fault drive, in test-data/rest-drive/).
 const FaultDrive* rest_drive();
 
+/// `liod-sim --route tunnel --seed 1 --duration 25 --max-speed 15`: 3 s at rest on the approach
+/// to a tunnel, then off and into it (made like the fault drive, in test-data/tunnel-rest-drive/).
+const FaultDrive* tunnel_rest_drive();
+
 /// `liod-sim --route highway --seed 108 --duration 6 --max-speed 15`: a rolling start at 15 m/s
 /// whose first two scans alone overlap best at 2-3 m/s (speed_search).
 const FaultDrive* aliasing_posts_drive();

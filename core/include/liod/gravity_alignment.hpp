@@ -22,6 +22,10 @@ struct GravityAlignment {
 std::optional<GravityAlignment> align_gravity(const std::deque<ImuSample>& samples, double from, double to,
                                               std::size_t min_samples = 10);
 
+/// The mean gyro reading over the samples in [from, to]; nullopt with fewer than min_samples.
+std::optional<Eigen::Vector3d> mean_angular_rate(const std::deque<ImuSample>& samples, double from, double to,
+                                                 std::size_t min_samples = 10);
+
 /// The rotation with zero yaw that maps the body's measured "up" (specific force direction) to +z.
 Eigen::Matrix3d rotation_from_up(const Eigen::Vector3d& up_in_body);
 

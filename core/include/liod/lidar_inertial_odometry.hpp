@@ -117,6 +117,7 @@ class LidarInertialOdometry {
   /// Adds the scan to the speed search; the speed at the first scan once the evidence suffices.
   std::optional<double> search_speed(const Scan& scan);
   void start_at_speed(double speed);
+  void settle_gyro_bias_at_rest(double from, double to);
   /// What the gyro's roll-and-pitch rocking says of the motion up to `time` (body_rocking.hpp).
   BodyMotion body_motion_until(double time) const;
   void process_scan(const Scan& scan, OdometryResult& result);
@@ -149,6 +150,7 @@ class LidarInertialOdometry {
     double first_end_time = 0.0;
     bool all_structure_standstill = false;  // the first scans' best speed with all of the structure, below 1 m/s
     bool evidence_standstill = false;    // the best speed off the rails so far, below 1 m/s
+    bool rocked = false;                 // the IMU saw the body rock while the search went on (body_rocking.hpp)
     std::optional<double> moving_peak;   // while the body rocks: a second peak of that evidence (separate_peak)
     std::vector<Scan> held;  // every scan since the first (at most kMaxSpeedSearch_s of them)
     std::vector<StructurePoints> structure;
