@@ -259,7 +259,6 @@ Schema declare_schema(Config& c) {
   s.real("odometry.correspondence_gate_m", &o.correspondence_gate_m, 0.05, 20.0);
   s.real("odometry.plane_thickness_m", &o.plane_thickness_m, 1e-4, 10.0);
   s.boolean("odometry.fit_uncertainty", &o.fit_uncertainty);
-  s.real("odometry.plane_tilt_noise_m", &o.plane_tilt_noise_m, 0.0, 0.5);
   s.boolean("odometry.post_edges", &o.post_edges);
   s.boolean("odometry.beam_calibration", &o.beam_calibration);
   s.real("odometry.keyframe_distance_m", &o.keyframe_distance_m, 0.0, 100.0);

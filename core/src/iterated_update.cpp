@@ -71,13 +71,6 @@ void accumulate(const std::vector<Eigen::Vector3d>& points_body, const NavState&
     const double w = huber_weight(r / std::sqrt(residual->variance_scale), k) / residual->variance_scale;
     eq.hessian.noalias() += w * h.transpose() * h;
     eq.gradient.noalias() += w * h.transpose() * r;
-    if (residual->has_tilt()) {
-      // h^T r = J^T normal r with J = d q / d (dtheta, dp); its expectation from the normal's tilt
-      // alone is J^T tilt_pull(q), which is taken out (LinearResidual::tilt_covariance).
-      const Eigen::Vector3d pull = residual->tilt_pull(q);
-      eq.gradient.head<3>().noalias() -= w * (so3::hat(pb) * (x.rotation.transpose() * pull));
-      eq.gradient.tail<3>().noalias() -= w * pull;
-    }
     eq.squared_error += r * r;
     ++eq.count;
   }

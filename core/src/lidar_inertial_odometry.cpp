@@ -242,7 +242,6 @@ LidarInertialOdometry::LidarInertialOdometry(const Config& config)
   update_params_.correspondence.max_distance_m = config.odometry.correspondence_gate_m;
   update_params_.correspondence.max_plane_thickness_m = config.odometry.plane_thickness_m;
   update_params_.correspondence.fit_uncertainty = config.odometry.fit_uncertainty;
-  update_params_.correspondence.tilt_noise_m = config.odometry.plane_tilt_noise_m;
   if (config.odometry.edge_residual == EdgeResidual::kAlongRay) {
     update_params_.edge_viewpoint_body = config.extrinsics.lidar_to_imu_translation;
     if (config.odometry.post_edges) update_params_.posts = PostParams{};

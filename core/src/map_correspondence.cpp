@@ -77,25 +77,14 @@ std::optional<LinearResidual> plane_correspondence(LocalMap::NeighbourSearch& ma
   // isotropic point noise). Without it, a query at the edge of its neighbourhood (ahead of the
   // rings the last keyframes left on the ground) carries a normal that noise tilted towards the
   // direction of travel, and its residual pulls the scan back onto the keyframes' ring pattern.
-  LinearResidual out{normal, offset};
-  if (params.fit_uncertainty) {
-    const Eigen::Vector3d from_centroid = query - m.mean;
-    out.variance_scale = 1.0 + 1.0 / n;
-    for (int axis = 1; axis < 3; ++axis) {
-      const double along = eig.eigenvectors().col(axis).dot(from_centroid);
-      out.variance_scale += along * along / (n * ev(axis));
-    }
+  if (!params.fit_uncertainty) return LinearResidual{normal, offset};
+  const Eigen::Vector3d from_centroid = query - m.mean;
+  double variance_scale = 1.0 + 1.0 / n;
+  for (int axis = 1; axis < 3; ++axis) {
+    const double along = eig.eigenvectors().col(axis).dot(from_centroid);
+    variance_scale += along * along / (n * ev(axis));
   }
-  if (params.tilt_noise_m > 0.0) {
-    // The same tilt, as a covariance of the normal: sigma^2 / (n spread_i^2) about each in-plane axis.
-    out.centroid = m.mean;
-    const double noise2 = params.tilt_noise_m * params.tilt_noise_m;
-    for (int axis = 1; axis < 3; ++axis) {
-      const Eigen::Vector3d e = eig.eigenvectors().col(axis);
-      out.tilt_covariance.noalias() += (noise2 / (n * ev(axis))) * e * e.transpose();
-    }
-  }
-  return out;
+  return LinearResidual{normal, offset, variance_scale};
 }
 
 std::optional<LinearResidual> post_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,

@@ -88,8 +88,6 @@ struct OdometryConfig {
   double correspondence_gate_m = 1.0;    // front end: farther map neighbours are not used
   double plane_thickness_m = 0.03;       // every neighbour within this of its fitted plane
   bool fit_uncertainty = true;           // a residual's variance includes its fitted plane's / line's uncertainty
-  double plane_tilt_noise_m = 0.015;     // map points' noise across their plane: the gradient drops the pull of
-                                         // the normal's tilt towards the neighbours' centroid (0: kept)
   EdgeResidual edge_residual = EdgeResidual::kAlongRay;
   bool beam_calibration = true;  // learn each beam's elevation offset from its ground residuals (beam_calibration.hpp)
   bool post_edges = true;  // along_ray only: edges on posts (map points one above the other) match the post's axis

@@ -16,15 +16,7 @@ struct LinearResidual {
   /// The residual's variance in units of the point noise: the query's own noise plus the fitted
   /// plane's (line's) uncertainty where the query lies (see map_correspondence.cpp).
   double variance_scale = 1.0;
-  /// A plane's normal fitted to noisy map points is tilted by their noise, and the tilt correlates
-  /// with the residual: E[normal * residual] = tilt_covariance (q - centroid), a pull of every
-  /// query towards its neighbours' centroid that the gradient should not carry (errors in
-  /// variables; zero where params.tilt_noise_m is 0, and for lines).
-  Eigen::Matrix3d tilt_covariance = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   double evaluate(const Eigen::Vector3d& q) const { return normal.dot(q) + offset; }
-  bool has_tilt() const { return tilt_covariance.trace() > 0.0; }
-  Eigen::Vector3d tilt_pull(const Eigen::Vector3d& q) const { return tilt_covariance * (q - centroid); }
 };
 
 struct CorrespondenceParams {
@@ -34,7 +26,6 @@ struct CorrespondenceParams {
   double min_plane_spread_ratio = 0.2; // second / largest spread (std) of the neighbours, against collinear ones
   double min_line_ratio = 3.0;         // largest / second eigenvalue for a line
   bool fit_uncertainty = true;         // false: a residual's variance is the point noise alone
-  double tilt_noise_m = 0.0;           // the map points' noise across their plane, for tilt_covariance (0: none)
 };
 
 std::optional<LinearResidual> plane_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
