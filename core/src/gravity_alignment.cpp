@@ -1,7 +1,9 @@
 #include "liod/gravity_alignment.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace liod {
 
@@ -14,31 +16,39 @@ Eigen::Matrix3d rotation_from_up(const Eigen::Vector3d& up_in_body) {
       .toRotationMatrix();
 }
 
-std::optional<Eigen::Vector3d> mean_angular_rate(const std::deque<ImuSample>& samples, double from, double to,
-                                                 std::size_t min_samples) {
+namespace {
+
+// The mean of one of the samples' readings over [from, to], with how many samples it took.
+std::optional<std::pair<Eigen::Vector3d, std::size_t>> mean_reading(const std::deque<ImuSample>& samples, double from,
+                                                                    double to, std::size_t min_samples,
+                                                                    Eigen::Vector3d ImuSample::*reading) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   std::size_t n = 0;
   for (const auto& s : samples) {
     if (s.time < from || s.time > to) continue;
-    sum += s.gyro;
+    sum += s.*reading;
     ++n;
   }
-  if (n < min_samples) return std::nullopt;
-  return sum / static_cast<double>(n);
+  if (n < std::max<std::size_t>(min_samples, 1)) return std::nullopt;
+  return std::make_pair(Eigen::Vector3d(sum / static_cast<double>(n)), n);
+}
+
+}  // namespace
+
+std::optional<Eigen::Vector3d> mean_angular_rate(const std::deque<ImuSample>& samples, double from, double to,
+                                                 std::size_t min_samples) {
+  const auto mean = mean_reading(samples, from, to, min_samples, &ImuSample::gyro);
+  if (!mean) return std::nullopt;
+  return mean->first;
 }
 
 std::optional<GravityAlignment> align_gravity(const std::deque<ImuSample>& samples, double from, double to,
                                               std::size_t min_samples) {
-  Eigen::Vector3d accel_sum = Eigen::Vector3d::Zero();
-  std::size_t n = 0;
-  for (const auto& s : samples) {
-    if (s.time < from || s.time > to) continue;
-    accel_sum += s.accel;
-    ++n;
-  }
+  const auto accel = mean_reading(samples, from, to, min_samples, &ImuSample::accel);
   const auto gyro_mean = mean_angular_rate(samples, from, to, min_samples);
-  if (n < min_samples || !gyro_mean) return std::nullopt;
-  const Eigen::Vector3d accel_mean = accel_sum / static_cast<double>(n);
+  if (!accel || !gyro_mean) return std::nullopt;
+  const Eigen::Vector3d& accel_mean = accel->first;
+  const std::size_t n = accel->second;
   double accel_var = 0.0;
   double gyro_max = 0.0;
   for (const auto& s : samples) {
