@@ -448,9 +448,10 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
     // Over an IMU gap the hypotheses' placements would rest on a held sample: decide without it.
     const bool imu_gap = !imu_gaps(imu_, state_.time, end, config_.imu.max_gap_s).empty();
     const bool timed_out = end - speed_search_->first_end_time >= kMaxSpeedSearch_s;
-    if (body_motion_until(end) == BodyMotion::kRocking) speed_search_->rocked = true;
+    const BodyMotion motion = body_motion_until(end);
+    if (motion == BodyMotion::kRocking) speed_search_->rocked = true;
     std::optional<double> speed;
-    if (!imu_gap && !timed_out) speed = search_speed(scan);
+    if (!imu_gap && !timed_out) speed = search_speed(scan, motion);
     if (speed || imu_gap || timed_out) {
       // Known at last, or not to be known: then first scans that saw a standstill in all of their
       // structure are taken at their word (a car waiting beside a rail) unless the body rocks on its
@@ -469,7 +470,7 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
       // the body rocks because the car rolls (kMinMovingPeakShare).
       if (!speed && speed_search_->evidence_standstill) speed = speed_search_->moving_peak;
       if (!speed && (speed_search_->evidence_standstill ||
-                     (speed_search_->all_structure_standstill && body_motion_until(end) != BodyMotion::kRocking))) {
+                     (speed_search_->all_structure_standstill && motion != BodyMotion::kRocking))) {
         speed = 0.0;
       }
       if (speed) start_at_speed(*speed);
@@ -535,7 +536,7 @@ LidarInertialOdometry::StructurePoints LidarInertialOdometry::vertical_structure
   return out;
 }
 
-std::optional<double> LidarInertialOdometry::search_speed(const Scan& scan) {
+std::optional<double> LidarInertialOdometry::search_speed(const Scan& scan, BodyMotion motion) {
   // A vehicle that may already be moving: the speed is what makes each scan land on the one
   // before. Each hypothesis (a speed along odometry.forward_axis at the first scan: a car does
   // not slide sideways) deskews the scans with the IMU and places them in one frame; their
@@ -623,7 +624,7 @@ std::optional<double> LidarInertialOdometry::search_speed(const Scan& scan) {
   // rocked at rest (a door shut) keeps its standstill's lead, decided once the rocking ends or at
   // the time limit.
   search.evidence_standstill = std::abs(centre) < kStandstillSpeed;
-  if (search.evidence_standstill && body_motion_until(scan_end_time(scan)) != BodyMotion::kStill) {
+  if (search.evidence_standstill && motion != BodyMotion::kStill) {
     search.moving_peak.reset();
     if (const auto peak = separate_peak(hypotheses, search.evidence, kMinMovingPeakSpeed, kMinMovingPeakShare)) {
       search.moving_peak =

@@ -389,8 +389,8 @@ TEST(FaultInjection, StartAtRestWhileTheBodyRocks) {
 
 TEST(FaultInjection, StartAtRestBeforeATunnelWhileTheBodyRocks) {
   LIOD_REQUIRE_DRIVE(drive, tunnel_rest_drive);
-  // The start-up alignment's second caught the rocking at a swing's peak and took 0.02 rad/s for
-  // the gyro bias; the first update then pushed the error into yaw, and the heading turned 23 deg
+  // The start-up alignment had only the first scan's 0.1 s, a swing's peak, and took 0.02 rad/s
+  // for the gyro bias; the first update then pushed the error into yaw, and the heading turned 23 deg
   // over the next 20 s (2.35 m ATE on this drive, 0.13 m unrocked). A standstill decided while
   // the body rocked takes the gyro's mean over the whole rest for its bias.
   const auto run = run_with_faults(*drive, {"rock:from=0,to=2.5"});

@@ -115,7 +115,8 @@ class LidarInertialOdometry {
   StructurePoints vertical_structure_points(const Scan& scan) const;
 
   /// Adds the scan to the speed search; the speed at the first scan once the evidence suffices.
-  std::optional<double> search_speed(const Scan& scan);
+  /// `motion`: what the gyro says of the body up to the scan's end (body_motion_until).
+  std::optional<double> search_speed(const Scan& scan, BodyMotion motion);
   void start_at_speed(double speed);
   void settle_gyro_bias_at_rest(double from, double to);
   /// What the gyro's roll-and-pitch rocking says of the motion up to `time` (body_rocking.hpp).
