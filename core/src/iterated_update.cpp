@@ -40,12 +40,23 @@ void to_world(const std::vector<Eigen::Vector3d>& points_body, const NavState& x
 // their order.
 template <typename Correspond>
 void search_correspondences(const std::vector<Eigen::Vector3d>& points_world, const LocalMap& map,
-                            const UpdateParams& params, Correspond correspond, Correspondences& cache) {
+                            const CorrespondenceParams& params, Correspond correspond, Correspondences& cache) {
   cache.resize(points_world.size());
   LocalMap::NeighbourSearch neighbours(map);
   for (const std::uint32_t i : map.voxel_order(points_world)) {
-    cache[i] = correspond(neighbours, points_world[i], params.correspondence);
+    cache[i] = correspond(neighbours, points_world[i], params);
   }
+}
+
+// The correspondence parameters at pose x: walls_blind_along_body turned into the world.
+CorrespondenceParams correspondence_at(const NavState& x, const UpdateParams& params) {
+  CorrespondenceParams p = params.correspondence;
+  if (!params.walls_blind_along_body) return p;
+  p.up = -x.gravity.normalized();
+  const Eigen::Vector3d axis = x.rotation * *params.walls_blind_along_body;
+  const Eigen::Vector3d horizontal = axis - axis.dot(p.up) * p.up;
+  if (horizontal.norm() > 1e-6) p.walls_blind_along = horizontal.normalized();
+  return p;
 }
 
 // With `search` the map is queried afresh; otherwise the planes/lines found last time are kept
@@ -57,7 +68,7 @@ void accumulate(const std::vector<Eigen::Vector3d>& points_body, const NavState&
                 Correspond correspond, bool search, Correspondences& cache, Normal6& eq) {
   const double k = 2.0 * params.lidar_noise_m;
   to_world(points_body, x, points_world);
-  if (search) search_correspondences(points_world, map, params, correspond, cache);
+  if (search) search_correspondences(points_world, map, correspondence_at(x, params), correspond, cache);
   for (std::size_t i = 0; i < points_body.size(); ++i) {
     const Eigen::Vector3d& pb = points_body[i];
     const Eigen::Vector3d& q = points_world[i];

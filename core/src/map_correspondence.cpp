@@ -66,10 +66,17 @@ std::optional<LinearResidual> plane_correspondence(LocalMap::NeighbourSearch& ma
   // so the normal would be arbitrary. Demand a real second dimension.
   const Eigen::Vector3d ev = eig.eigenvalues();
   if (ev(1) < params.min_plane_spread_ratio * params.min_plane_spread_ratio * ev(2)) return std::nullopt;
-  const Eigen::Vector3d normal = eig.eigenvectors().col(0).normalized();
-  const double offset = -normal.dot(m.mean);
+  Eigen::Vector3d normal = eig.eigenvectors().col(0).normalized();
+  double offset = -normal.dot(m.mean);
   for (int i = 0; i < n; ++i) {
     if (std::abs(normal.dot(nn[static_cast<std::size_t>(i)]) + offset) > params.max_plane_thickness_m) return std::nullopt;
+  }
+  if (!params.walls_blind_along.isZero() && std::abs(normal.dot(params.up)) < params.wall_max_up_cosine) {
+    // The plane turned about its centroid until it is parallel to walls_blind_along.
+    const Eigen::Vector3d across = normal - normal.dot(params.walls_blind_along) * params.walls_blind_along;
+    if (across.norm() < 0.5) return std::nullopt;  // facing that way: it would locate nothing else
+    normal = across.normalized();
+    offset = -normal.dot(m.mean);
   }
   // A plane fitted to n points with noise sigma has its offset at the centroid known to sigma^2/n
   // and its tilt about the in-plane axis e_i to sigma^2 / (n spread_i^2); at the query, the tilt

@@ -164,4 +164,58 @@ TEST(MapCorrespondence, HorizontalEdgesAndScatteredPointsAreNoPost) {
   EXPECT_FALSE(post_at(map, {5.54, -4.31, 0.2}, Eigen::Vector3d::UnitX()));
 }
 
+
+// A plane's eight map points centred on `centre` (4 x 2 along u and v, 0.2 / 0.3 m apart): every
+// query near it has the same neighbours, so the fitted plane's centroid is `centre`.
+liod::LocalMap patch_map(const Eigen::Vector3d& centre, const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
+  liod::LocalMap map(1.0, liod::LocalMap::kMaxPointsPerVoxel, 0.0);
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 2; ++j) points.push_back(centre + 0.2 * (i - 1.5) * u + 0.3 * (j - 0.5) * v);
+  }
+  map.add(points, 0);
+  return map;
+}
+
+TEST(MapCorrespondence, WallsBlindAlongTheTrackLocateAcrossItOnly) {
+  liod::CorrespondenceParams params;
+  params.neighbours = 8;
+  params.max_distance_m = 1.0;
+  liod::CorrespondenceParams blind = params;
+  blind.walls_blind_along = Eigen::Vector3d::UnitX();
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  // A wall at 30 degrees to the track (x), as a barrier seen at a slant ahead.
+  const Eigen::Vector3d along_wall(std::cos(M_PI / 6), std::sin(M_PI / 6), 0.0);
+  const Eigen::Vector3d on_wall(10.0, 4.0, 0.6);
+  const liod::LocalMap wall = patch_map(on_wall, along_wall, up);
+  liod::LocalMap::NeighbourSearch wall_search(wall);
+  const Eigen::Vector3d along_track_step = on_wall + Eigen::Vector3d(0.2, 0.0, 0.0);
+  const auto seen = liod::plane_correspondence(wall_search, along_track_step, params);
+  const auto blinded = liod::plane_correspondence(wall_search, along_track_step, blind);
+  ASSERT_TRUE(seen && blinded);
+  EXPECT_NEAR(std::abs(seen->evaluate(along_track_step)), 0.2 * std::sin(M_PI / 6), 1e-6);
+  EXPECT_NEAR(blinded->evaluate(along_track_step), 0.0, 1e-6);  // a step along the track is not seen
+  EXPECT_NEAR(blinded->normal.norm(), 1.0, 1e-9);
+  EXPECT_NEAR(blinded->normal.x(), 0.0, 1e-9);
+  const Eigen::Vector3d across_step = on_wall + Eigen::Vector3d(0.0, 0.2, 0.0);
+  EXPECT_NEAR(std::abs(blinded->evaluate(across_step)), 0.2, 1e-6);  // one across it is, in full
+
+  // The ground keeps its normal (it holds height, roll and pitch, and has no along-track part).
+  const liod::LocalMap ground = patch_map(Eigen::Vector3d(10.0, 0.0, -1.8), Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY());
+  liod::LocalMap::NeighbourSearch ground_search(ground);
+  const Eigen::Vector3d above(10.1, 0.05, -1.7);
+  const auto ground_seen = liod::plane_correspondence(ground_search, above, params);
+  const auto ground_blinded = liod::plane_correspondence(ground_search, above, blind);
+  ASSERT_TRUE(ground_seen && ground_blinded);
+  EXPECT_NEAR(ground_blinded->evaluate(above), ground_seen->evaluate(above), 1e-12);
+  EXPECT_NEAR(std::abs(ground_blinded->evaluate(above)), 0.1, 1e-6);
+
+  // A wall facing the track would locate nothing else: no residual.
+  const liod::LocalMap facing = patch_map(Eigen::Vector3d(20.0, 0.0, 0.6), Eigen::Vector3d::UnitY(), up);
+  liod::LocalMap::NeighbourSearch facing_search(facing);
+  const Eigen::Vector3d before(19.8, 0.0, 0.6);
+  EXPECT_TRUE(liod::plane_correspondence(facing_search, before, params).has_value());
+  EXPECT_FALSE(liod::plane_correspondence(facing_search, before, blind).has_value());
+}
+
 }  // namespace

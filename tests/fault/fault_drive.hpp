@@ -39,6 +39,8 @@ const FaultDrive* rest_drive();
 /// `liod-sim --route tunnel --seed 1 --duration 25 --max-speed 15`: 3 s at rest on the approach
 /// to a tunnel, then off and into it (made like the fault drive, in test-data/tunnel-rest-drive/).
 const FaultDrive* tunnel_rest_drive();
+/// Highway seed 4, 8 s up to 15 m/s, 3 s at rest: moving off between slanted barrier faces.
+const FaultDrive* move_off_drive();
 
 /// `liod-sim --route highway --seed 108 --duration 6 --max-speed 15`: a rolling start at 15 m/s
 /// whose first two scans alone overlap best at 2-3 m/s (speed_search).
