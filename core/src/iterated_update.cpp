@@ -48,14 +48,13 @@ void search_correspondences(const std::vector<Eigen::Vector3d>& points_world, co
   }
 }
 
-// The correspondence parameters at pose x: walls_blind_along_body turned into the world.
+// The correspondence parameters at pose x: planes_blind_along_body turned into the world.
 CorrespondenceParams correspondence_at(const NavState& x, const UpdateParams& params) {
   CorrespondenceParams p = params.correspondence;
-  if (!params.walls_blind_along_body) return p;
+  if (!params.planes_blind_along_body) return p;
+  p.blind_along = (x.rotation * *params.planes_blind_along_body).normalized();
+  p.blind_ground = params.ground_blind_too;
   p.up = -x.gravity.normalized();
-  const Eigen::Vector3d axis = x.rotation * *params.walls_blind_along_body;
-  const Eigen::Vector3d horizontal = axis - axis.dot(p.up) * p.up;
-  if (horizontal.norm() > 1e-6) p.walls_blind_along = horizontal.normalized();
   return p;
 }
 

@@ -478,7 +478,7 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
       std::vector<Scan> held = std::move(speed_search_->held);
       speed_search_.reset();
       const bool standstill = speed && std::abs(*speed) < kStandstillSpeed;
-      moving_off_ = standstill && config_.odometry.move_off_walls_across;
+      moving_off_ = standstill && config_.odometry.move_off_planes_across;
       if (standstill && rocked) settle_gyro_bias_at_rest(held.front().start_time + extrinsics_.lidar_time_offset_s, end);
       for (std::size_t i = standstill ? 0 : held.size() - 1; i < held.size(); ++i) {
         OdometryResult unreported;  // the first keyframe, and the standstill's scans before this one
@@ -712,14 +712,20 @@ void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& resul
     // prior along the forward axis, the velocity taking the corrections meanwhile.
     result.forward_hold = hold_forward_accel_bias_;
     if (hold_forward_accel_bias_) hold_forward_acceleration(predicted_covariance, predicted, config_.odometry.forward_axis);
-    // Moving off from a standstill, the map is the standstill's one keyframe, and its walls (any
-    // plane not ground: rail ends, the rings' short arcs on posts and on objects ahead), seen from
+    // Moving off from a standstill, the map is the standstill's one keyframe, and its planes
+    // (rail ends, the rings' short arcs on posts, on objects ahead and on the ground), seen from
     // that one viewpoint, pulled each scan back along the track: on the highway's ~150 residuals
     // a scan that outweighed the IMU, and 8 s static starts lost 0.05-0.11 m/s a scan and ran up
-    // to 19 % short. Until the second keyframe walls only locate the scan across the track; the
-    // ground, edges and posts keep their full pull (docs/odometry.md "Moving off").
+    // to 19 % short. Until the second keyframe walls locate the scan across the track only, and
+    // the ground too once the body rolls (body_rocking.hpp): at rest the scans are the map's
+    // viewpoint, and the ground's fine pattern holds the position where the walls let go
+    // (30 s parked: 0.08 m ATE, 0.44 m with the ground blind as well). Edges and posts keep their
+    // full pull (docs/odometry.md "Moving off").
     UpdateParams params = update_params_;
-    if (moving_off_) params.walls_blind_along_body = config_.odometry.forward_axis;
+    if (moving_off_) {
+      params.planes_blind_along_body = config_.odometry.forward_axis;
+      params.ground_blind_too = body_motion_until(t_end) == BodyMotion::kRocking;
+    }
     UpdateResult update = iterated_update(predicted, predicted_covariance, features.planes, plane_map_, features.edges,
                                           edge_map_, params);
     if (velocity_std(predicted_covariance) > kTrustedVelocityStd && config_.odometry.deskew == DeskewMode::kImu) {

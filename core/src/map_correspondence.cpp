@@ -71,9 +71,10 @@ std::optional<LinearResidual> plane_correspondence(LocalMap::NeighbourSearch& ma
   for (int i = 0; i < n; ++i) {
     if (std::abs(normal.dot(nn[static_cast<std::size_t>(i)]) + offset) > params.max_plane_thickness_m) return std::nullopt;
   }
-  if (!params.walls_blind_along.isZero() && std::abs(normal.dot(params.up)) < params.wall_max_up_cosine) {
-    // The plane turned about its centroid until it is parallel to walls_blind_along.
-    const Eigen::Vector3d across = normal - normal.dot(params.walls_blind_along) * params.walls_blind_along;
+  if (!params.blind_along.isZero() &&
+      (params.blind_ground || std::abs(normal.dot(params.up)) < params.wall_max_up_cosine)) {
+    // The plane turned about its centroid until it is parallel to blind_along.
+    const Eigen::Vector3d across = normal - normal.dot(params.blind_along) * params.blind_along;
     if (across.norm() < 0.5) return std::nullopt;  // facing that way: it would locate nothing else
     normal = across.normalized();
     offset = -normal.dot(m.mean);

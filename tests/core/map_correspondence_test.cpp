@@ -182,7 +182,7 @@ TEST(MapCorrespondence, WallsBlindAlongTheTrackLocateAcrossItOnly) {
   params.neighbours = 8;
   params.max_distance_m = 1.0;
   liod::CorrespondenceParams blind = params;
-  blind.walls_blind_along = Eigen::Vector3d::UnitX();
+  blind.blind_along = Eigen::Vector3d::UnitX();
   const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
   // A wall at 30 degrees to the track (x), as a barrier seen at a slant ahead.
   const Eigen::Vector3d along_wall(std::cos(M_PI / 6), std::sin(M_PI / 6), 0.0);
@@ -200,14 +200,23 @@ TEST(MapCorrespondence, WallsBlindAlongTheTrackLocateAcrossItOnly) {
   const Eigen::Vector3d across_step = on_wall + Eigen::Vector3d(0.0, 0.2, 0.0);
   EXPECT_NEAR(std::abs(blinded->evaluate(across_step)), 0.2, 1e-6);  // one across it is, in full
 
-  // The ground keeps its normal (it holds height, roll and pitch, and has no along-track part).
-  const liod::LocalMap ground = patch_map(Eigen::Vector3d(10.0, 0.0, -1.8), Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY());
+  // The ground, here rising 5 % along the track, keeps its normal unless blind_ground: at rest its
+  // fine pattern holds the position; once rolling it too locates the scan across the track only.
+  const Eigen::Vector3d uphill = Eigen::Vector3d(1.0, 0.0, 0.05).normalized();
+  const Eigen::Vector3d on_ground(10.0, 0.0, -1.8);
+  const liod::LocalMap ground = patch_map(on_ground, uphill, Eigen::Vector3d::UnitY());
   liod::LocalMap::NeighbourSearch ground_search(ground);
-  const Eigen::Vector3d above(10.1, 0.05, -1.7);
-  const auto ground_seen = liod::plane_correspondence(ground_search, above, params);
-  const auto ground_blinded = liod::plane_correspondence(ground_search, above, blind);
-  ASSERT_TRUE(ground_seen && ground_blinded);
-  EXPECT_NEAR(ground_blinded->evaluate(above), ground_seen->evaluate(above), 1e-12);
+  const Eigen::Vector3d ahead = on_ground + Eigen::Vector3d(0.2, 0.0, 0.0);
+  const auto ground_seen = liod::plane_correspondence(ground_search, ahead, params);
+  const auto ground_kept = liod::plane_correspondence(ground_search, ahead, blind);
+  liod::CorrespondenceParams blind_ground = blind;
+  blind_ground.blind_ground = true;
+  const auto ground_blinded = liod::plane_correspondence(ground_search, ahead, blind_ground);
+  ASSERT_TRUE(ground_seen && ground_kept && ground_blinded);
+  EXPECT_NEAR(std::abs(ground_seen->evaluate(ahead)), 0.2 * 0.05 / std::hypot(1.0, 0.05), 1e-6);
+  EXPECT_NEAR(ground_kept->evaluate(ahead), ground_seen->evaluate(ahead), 1e-12);
+  EXPECT_NEAR(ground_blinded->evaluate(ahead), 0.0, 1e-6);
+  const Eigen::Vector3d above = on_ground + Eigen::Vector3d(0.0, 0.0, 0.1);
   EXPECT_NEAR(std::abs(ground_blinded->evaluate(above)), 0.1, 1e-6);
 
   // A wall facing the track would locate nothing else: no residual.

@@ -91,7 +91,7 @@ struct OdometryConfig {
   EdgeResidual edge_residual = EdgeResidual::kAlongRay;
   bool beam_calibration = true;  // learn each beam's elevation offset from its ground residuals (beam_calibration.hpp)
   bool post_edges = true;  // along_ray only: edges on posts (map points one above the other) match the post's axis
-  bool move_off_walls_across = true;  // after a standstill start, until the 2nd keyframe: walls locate across the track only
+  bool move_off_planes_across = true;  // after a standstill start, until the 2nd keyframe: walls (and once rolling, the ground) locate across the track only
   double keyframe_distance_m = 1.0;
   double keyframe_angle_deg = 10.0;
   double hausdorff_threshold_m = 0.6; // h1

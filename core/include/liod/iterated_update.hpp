@@ -38,9 +38,11 @@ struct UpdateParams {
   /// With a viewpoint: an edge point whose nearest map edge points form a post is matched to the
   /// post's vertical axis (post_correspondence) before a fitted line is tried.
   std::optional<PostParams> posts;
-  /// A body axis (the vehicle's forward axis) along which walls are not to pull: the search sets
-  /// CorrespondenceParams::walls_blind_along to its horizontal part at the current pose.
-  std::optional<Eigen::Vector3d> walls_blind_along_body;
+  /// A body axis (the vehicle's forward axis) along which walls, and with ground_blind_too every
+  /// plane, are not to pull: the search sets CorrespondenceParams::blind_along to it, turned
+  /// into the world at the current pose.
+  std::optional<Eigen::Vector3d> planes_blind_along_body;
+  bool ground_blind_too = false;
 };
 
 struct UpdateResult {

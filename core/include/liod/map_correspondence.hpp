@@ -26,10 +26,12 @@ struct CorrespondenceParams {
   double min_plane_spread_ratio = 0.2; // second / largest spread (std) of the neighbours, against collinear ones
   double min_line_ratio = 3.0;         // largest / second eigenvalue for a line
   bool fit_uncertainty = true;         // false: a residual's variance is the point noise alone
-  /// Non-zero (a horizontal unit vector, world frame): a wall's normal (a plane whose normal is
-  /// within wall_max_up_cosine of horizontal) loses its component along it, so that walls only
-  /// locate the query across that direction; a wall nearly facing it gives no residual.
-  Eigen::Vector3d walls_blind_along = Eigen::Vector3d::Zero();
+  /// Non-zero (a unit vector, world frame): a wall's normal (a plane whose normal is within
+  /// wall_max_up_cosine of horizontal), and with blind_ground any plane's, loses its component
+  /// along it, so that the plane locates the query across that direction only; a plane nearly
+  /// facing it (less than half of its normal left) gives no residual.
+  Eigen::Vector3d blind_along = Eigen::Vector3d::Zero();
+  bool blind_ground = false;
   Eigen::Vector3d up = Eigen::Vector3d::UnitZ();  // the world's up, for telling walls from ground
   double wall_max_up_cosine = 0.7;
 };
