@@ -164,7 +164,6 @@ TEST(MapCorrespondence, HorizontalEdgesAndScatteredPointsAreNoPost) {
   EXPECT_FALSE(post_at(map, {5.54, -4.31, 0.2}, Eigen::Vector3d::UnitX()));
 }
 
-
 // A plane's eight map points centred on `centre` (4 x 2 along u and v, 0.2 / 0.3 m apart): every
 // query near it has the same neighbours, so the fitted plane's centroid is `centre`.
 liod::LocalMap patch_map(const Eigen::Vector3d& centre, const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
@@ -177,7 +176,7 @@ liod::LocalMap patch_map(const Eigen::Vector3d& centre, const Eigen::Vector3d& u
   return map;
 }
 
-TEST(MapCorrespondence, WallsBlindAlongTheTrackLocateAcrossItOnly) {
+TEST(MapCorrespondence, PlanesBlindAlongTheTrackLocateAcrossItOnly) {
   liod::CorrespondenceParams params;
   params.neighbours = 8;
   params.max_distance_m = 1.0;

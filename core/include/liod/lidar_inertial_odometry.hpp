@@ -162,8 +162,9 @@ class LidarInertialOdometry {
   // The forward accelerometer bias is kept out of the next LiDAR update: at a rolling start, and
   // after a scan that left the along-track position unconstrained (process_scan explains why).
   bool hold_forward_accel_bias_ = false;
-  // Started from a standstill and not yet two keyframes on: walls locate across the track only
-  // (odometry.move_off_planes_across; process_scan explains why).
+  // Started from a standstill and not yet two keyframes on: walls, and the ground once the body
+  // rolls, locate the scan across the track only (odometry.move_off_planes_across; process_scan
+  // explains why).
   bool moving_off_ = false;
   int scans_since_imu_inconsistent_ = 0;
   NavState state_;
