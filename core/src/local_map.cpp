@@ -5,6 +5,18 @@
 #include <limits>
 
 namespace liod {
+namespace {
+
+// A hint only (no effect on results); compilers without the builtin skip it.
+inline void prefetch(const void* address) {
+#if defined(__GNUC__) || defined(__clang__)
+  __builtin_prefetch(address);
+#else
+  (void)address;
+#endif
+}
+
+}  // namespace
 
 LocalMap::LocalMap(double voxel_size, int max_points_per_voxel, double min_point_spacing)
     : inverse_voxel_size_(1.0 / voxel_size),
@@ -99,9 +111,7 @@ void LocalMap::add(const std::vector<Eigen::Vector3d>& points, std::uint64_t key
       crowded = (voxel.point(i) - pf).squaredNorm() < min_spacing_squared_;
     }
     if (crowded) continue;
-    voxel.x[voxel.count] = pf.x();
-    voxel.y[voxel.count] = pf.y();
-    voxel.z[voxel.count] = pf.z();
+    voxel.set(voxel.count, pf);
     voxel.keyframes[voxel.count] = tag;
     ++voxel.count;
     ++point_count_;
@@ -118,9 +128,7 @@ void LocalMap::remove_keyframe(const std::vector<Eigen::Vector3d>& points, std::
     std::uint32_t kept = 0;
     for (std::uint32_t i = 0; i < voxel.count; ++i) {
       if (voxel.keyframes[i] == tag) continue;
-      voxel.x[kept] = voxel.x[i];
-      voxel.y[kept] = voxel.y[i];
-      voxel.z[kept] = voxel.z[i];
+      voxel.set(kept, voxel.point(i));
       voxel.keyframes[kept] = voxel.keyframes[i];
       ++kept;
     }
@@ -181,6 +189,15 @@ int LocalMap::NeighbourSearch::nearest(const Eigen::Vector3d& query, int k, doub
     centre_ = own;
     have_centre_ = true;
     looked_up_ = 0;
+    // The block's hash slots lie scattered over the table: ask for all of them at once, so that
+    // their cache misses overlap instead of coming one after another in the visits below.
+    for (int i = std::max(lo.x - own.x, -1); i <= std::min(hi.x - own.x, 1); ++i) {
+      for (int j = std::max(lo.y - own.y, -1); j <= std::min(hi.y - own.y, 1); ++j) {
+        for (int l = std::max(lo.z - own.z, -1); l <= std::min(hi.z - own.z, 1); ++l) {
+          prefetch(&map_->slots_[map_->slot_of({own.x + i, own.y + j, own.z + l})]);
+        }
+      }
+    }
   }
   const float voxel_size = static_cast<float>(1.0 / inverse_voxel_size);
   auto squared = [](float a, float b, float c) { return a * a + (b * b + c * c); };  // as Eigen's squaredNorm
@@ -207,8 +224,13 @@ int LocalMap::NeighbourSearch::nearest(const Eigen::Vector3d& query, int k, doub
     if (voxel == nullptr) return;
     const std::uint32_t count = voxel->count;
     std::array<float, kMaxPointsPerVoxel> d2;
-    for (std::uint32_t j = 0; j < count; ++j) {
-      d2[j] = squared(voxel->x[j] - qx, voxel->y[j] - qy, voxel->z[j] - qz);
+    for (std::uint32_t b = 0; b * kBlock < count; ++b) {  // whole blocks: the tail's d2 go unread
+      const Voxel::Block& block = voxel->blocks[b];
+      for (int l = 0; l < kBlock; ++l) {
+        d2[b * kBlock + static_cast<std::uint32_t>(l)] = squared(block.x[static_cast<std::size_t>(l)] - qx,
+                                                                block.y[static_cast<std::size_t>(l)] - qy,
+                                                                block.z[static_cast<std::size_t>(l)] - qz);
+      }
     }
     for (std::uint32_t j = 0; j < count; ++j) {
       if (d2[j] >= worst) continue;

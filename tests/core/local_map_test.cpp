@@ -60,6 +60,36 @@ TEST(LocalMap, VoxelOrderGroupsQueriesByVoxelAndAnswersThemAlike) {
   }
 }
 
+// Full voxels (their points span several of the voxel's storage blocks), then half of them
+// removed (the rest compacted across the blocks): the answers stay those of a brute-force search
+// over what the map keeps.
+TEST(LocalMap, FullVoxelsAnswerAsBruteForceBeforeAndAfterARemoval) {
+  liod::LocalMap map(1.0, liod::LocalMap::kMaxPointsPerVoxel, 0.0);
+  const auto a = random_cloud(1000, 5, 2.0);  // about half of each voxel, b the rest
+  const auto b = random_cloud(3000, 6, 2.0);
+  map.add(a, 1);
+  map.add(b, 2);
+  ASSERT_EQ(map.size(), 64U * liod::LocalMap::kMaxPointsPerVoxel);  // 4 x 4 x 4 voxels, every one full
+  for (int removed = 0; removed < 2; ++removed) {
+    const auto kept = map.points();
+    for (const auto& q : random_cloud(300, 7 + static_cast<unsigned>(removed), 1.8)) {
+      std::array<Eigen::Vector3d, liod::LocalMap::kMaxNeighbours> nn;
+      const int found = map.nearest(q, liod::LocalMap::kMaxNeighbours, 0.7, nn);
+      std::vector<double> d;
+      for (const auto& p : kept) {
+        if ((p - q).norm() < 0.7) d.push_back((p - q).norm());
+      }
+      std::sort(d.begin(), d.end());
+      ASSERT_EQ(found, static_cast<int>(std::min<std::size_t>(liod::LocalMap::kMaxNeighbours, d.size())));
+      for (int i = 0; i < found; ++i) EXPECT_NEAR((nn[static_cast<std::size_t>(i)] - q).norm(), d[static_cast<std::size_t>(i)], 1e-5);
+    }
+    if (removed == 0) {
+      map.remove_keyframe(a, 1);
+      EXPECT_EQ(map.size(), kept.size() - a.size());
+    }
+  }
+}
+
 TEST(LocalMap, SpacingAndCapacityLimitDensity) {
   liod::LocalMap map(1.0, 3, 0.2);
   map.add({{0.1, 0.1, 0.1}, {0.15, 0.1, 0.1}, {0.5, 0.5, 0.5}, {0.9, 0.9, 0.9}, {0.9, 0.1, 0.1}}, 0);

@@ -65,15 +65,30 @@ class LocalMap {
   std::vector<Eigen::Vector3d> points() const;
 
  private:
-  // Coordinates apart (structure of arrays), so that the distances to a voxel's points are
-  // computed several at a time.
+  // Coordinates apart in blocks of eight points (x's, y's, z's), so that the distances to a
+  // voxel's points are computed several at a time, and a voxel of n points spans only the cache
+  // lines of its first n / 8 blocks. The count leads, in the first block's line.
+  static constexpr int kBlock = 8;
+  static_assert(kMaxPointsPerVoxel % kBlock == 0, "whole blocks");
   struct Voxel {
-    std::array<float, kMaxPointsPerVoxel> x{};
-    std::array<float, kMaxPointsPerVoxel> y{};
-    std::array<float, kMaxPointsPerVoxel> z{};
-    std::array<std::uint32_t, kMaxPointsPerVoxel> keyframes{};
+    struct Block {
+      std::array<float, kBlock> x{};
+      std::array<float, kBlock> y{};
+      std::array<float, kBlock> z{};
+    };
     std::uint32_t count = 0;
-    Eigen::Vector3f point(std::uint32_t i) const { return {x[i], y[i], z[i]}; }
+    std::array<Block, kMaxPointsPerVoxel / kBlock> blocks{};
+    std::array<std::uint32_t, kMaxPointsPerVoxel> keyframes{};
+    Eigen::Vector3f point(std::uint32_t i) const {
+      const Block& b = blocks[i / kBlock];
+      return {b.x[i % kBlock], b.y[i % kBlock], b.z[i % kBlock]};
+    }
+    void set(std::uint32_t i, const Eigen::Vector3f& p) {
+      Block& b = blocks[i / kBlock];
+      b.x[i % kBlock] = p.x();
+      b.y[i % kBlock] = p.y();
+      b.z[i % kBlock] = p.z();
+    }
   };
   // The key sits in the slot, so that probing reads the slot array only, not the voxels.
   struct Slot {
