@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "liod/config.hpp"
+#include "liod/local_map.hpp"
 
 namespace liod {
 namespace {
@@ -249,13 +250,13 @@ Schema declare_schema(Config& c) {
   s.real("odometry.plane_voxel_m", &o.plane_voxel_m, 0.01, 5.0);
   s.real("odometry.edge_voxel_m", &o.edge_voxel_m, 0.01, 5.0);
   s.real("odometry.map_voxel_m", &o.map_voxel_m, 0.1, 10.0);
-  s.integer("odometry.map_points_per_voxel", &o.map_points_per_voxel, 1, 1000);
+  s.integer("odometry.map_points_per_voxel", &o.map_points_per_voxel, 1, LocalMap::kMaxPointsPerVoxel);
   s.real("odometry.map_min_point_spacing_m", &o.map_min_point_spacing_m, 0.0, 5.0);
   s.integer("odometry.max_iterations", &o.max_iterations, 1, 50);
   s.integer("odometry.forced_searches", &o.forced_searches, 1, 50);
   s.real("odometry.lidar_noise_m", &o.lidar_noise_m, 1e-4, 10.0);
   s.real("odometry.max_correspondence_m", &o.max_correspondence_m, 0.05, 20.0);
-  s.integer("odometry.correspondence_neighbours", &o.correspondence_neighbours, 3, 8);
+  s.integer("odometry.correspondence_neighbours", &o.correspondence_neighbours, 3, LocalMap::kMaxNeighbours);
   s.real("odometry.correspondence_gate_m", &o.correspondence_gate_m, 0.05, 20.0);
   s.real("odometry.plane_thickness_m", &o.plane_thickness_m, 1e-4, 10.0);
   s.boolean("odometry.fit_uncertainty", &o.fit_uncertainty);
