@@ -43,13 +43,20 @@ inline VoxelKey voxel_of(const Eigen::Vector3d& p, double inverse_size) {
 class VoxelSet {
  public:
   explicit VoxelSet(std::size_t expected);
+  struct Insertion {
+    bool inserted;        // the key was not in the set yet
+    std::uint32_t index;  // the key's number: 0, 1, 2, ... in the order keys were first inserted
+  };
+  Insertion insert_numbered(const VoxelKey& key);
   /// True if the key was not in the set yet.
-  bool insert(const VoxelKey& key);
+  bool insert(const VoxelKey& key) { return insert_numbered(key).inserted; }
 
  private:
   void grow();
+  Insertion place(const VoxelKey& key, std::uint32_t index_if_new);
 
   std::vector<VoxelKey> keys_;
+  std::vector<std::uint32_t> numbers_;
   std::vector<std::uint8_t> used_;
   std::size_t size_ = 0;
 };
@@ -57,5 +64,10 @@ class VoxelSet {
 /// Keeps the first point that falls in each voxel of the given size (a real measured point,
 /// not a centroid, so that surfaces are not smeared across corners).
 std::vector<Eigen::Vector3d> voxel_downsample(const std::vector<Eigen::Vector3d>& points, double voxel_size);
+
+/// Keeps the point of lowest score in each voxel (the first of equals), in the order the voxels
+/// were first seen: with equal scores, voxel_downsample.
+std::vector<Eigen::Vector3d> voxel_downsample_lowest(const std::vector<Eigen::Vector3d>& points,
+                                                     const std::vector<float>& scores, double voxel_size);
 
 }  // namespace liod
