@@ -125,8 +125,12 @@ void LocalMap::remove_keyframe(const std::vector<Eigen::Vector3d>& points, std::
     const std::int32_t index = find_index(key);
     if (index < 0) continue;
     Voxel& voxel = voxels_[static_cast<std::size_t>(index)];
+    // A keyframe has several points in most of its voxels, and the first of them took all of its
+    // points out: the later ones find none and leave the voxel untouched.
     std::uint32_t kept = 0;
-    for (std::uint32_t i = 0; i < voxel.count; ++i) {
+    while (kept < voxel.count && voxel.keyframes[kept] != tag) ++kept;
+    if (kept == voxel.count) continue;
+    for (std::uint32_t i = kept + 1; i < voxel.count; ++i) {
       if (voxel.keyframes[i] == tag) continue;
       voxel.set(kept, voxel.point(i));
       voxel.keyframes[kept] = voxel.keyframes[i];

@@ -2,43 +2,41 @@
 
 namespace liod {
 
-VoxelSet::VoxelSet(std::size_t expected) {
+VoxelSet::VoxelSet(std::size_t points) {
   std::size_t capacity = 16;
-  while (capacity < 2 * expected) capacity *= 2;  // at most half full: short probes
-  keys_.resize(capacity);
-  numbers_.resize(capacity);
-  used_.assign(capacity, 0);
+  while (capacity < points) capacity *= 2;  // half of the points at most half full
+  allocate(capacity);
+}
+
+void VoxelSet::allocate(std::size_t capacity) {
+  slots_.assign(capacity, Slot{});
+  size_ = 0;
 }
 
 VoxelSet::Insertion VoxelSet::insert_numbered(const VoxelKey& key) {
-  if (2 * (size_ + 1) > keys_.size()) grow();
+  if (2 * (size_ + 1) > slots_.size()) grow();
   return place(key, static_cast<std::uint32_t>(size_));
 }
 
 VoxelSet::Insertion VoxelSet::place(const VoxelKey& key, std::uint32_t index_if_new) {
-  const std::size_t mask = keys_.size() - 1;
+  const std::size_t mask = slots_.size() - 1;
   for (std::size_t i = VoxelKeyHash{}(key) & mask;; i = (i + 1) & mask) {
-    if (!used_[i]) {
-      keys_[i] = key;
-      numbers_[i] = index_if_new;
-      used_[i] = 1;
+    Slot& slot = slots_[i];
+    if (slot.number == kFree) {
+      slot.key = key;
+      slot.number = index_if_new;
       ++size_;
       return {true, index_if_new};
     }
-    if (keys_[i] == key) return {false, numbers_[i]};
+    if (slot.key == key) return {false, slot.number};
   }
 }
 
 void VoxelSet::grow() {
-  const std::vector<VoxelKey> keys = std::move(keys_);
-  const std::vector<std::uint32_t> numbers = std::move(numbers_);
-  const std::vector<std::uint8_t> used = std::move(used_);
-  keys_.assign(2 * keys.size(), VoxelKey{});
-  numbers_.assign(2 * keys.size(), 0);
-  used_.assign(2 * keys.size(), 0);
-  size_ = 0;
-  for (std::size_t i = 0; i < keys.size(); ++i) {
-    if (used[i]) place(keys[i], numbers[i]);
+  const std::vector<Slot> old = std::move(slots_);
+  allocate(2 * old.size());
+  for (const Slot& slot : old) {
+    if (slot.number != kFree) place(slot.key, slot.number);
   }
 }
 
