@@ -40,10 +40,10 @@ int curvature_neighbourhood_size(double range_m, CurvatureNeighbourhood mode) {
 void FeatureExtractor::extract(const Scan& scan, ScanFeatures& out) {
   out.edges.clear();
   out.planes.clear();
+  out.plane_curvatures.clear();
   const std::size_t beams = std::max<std::size_t>(scan.beam_count, 1);
   if (rings_.size() < beams) rings_.resize(beams);
   for (auto& ring : rings_) ring.clear();
-  curvature_.assign(scan.points.size(), std::numeric_limits<float>::quiet_NaN());
   range_.resize(scan.points.size());
   const float min_range = static_cast<float>(params_.min_range_m);
   const float max_range = static_cast<float>(params_.max_range_m);
@@ -138,7 +138,6 @@ void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uin
     const float c = std::sqrt(sum.x() * sum.x() + sum.y() * sum.y() + sum.z() * sum.z()) /
                     (static_cast<float>(2 * half) * r);
     ring_curvature[static_cast<std::size_t>(k)] = c;
-    curvature_[ring[static_cast<std::size_t>(k)]] = c;
   }
 
   // Per sector: the sharpest points become edges (spread out), the flattest ones planes.
@@ -167,7 +166,10 @@ void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uin
       for (int m = lo; m <= hi; ++m) excluded_[static_cast<std::size_t>(m)] = 1;
     }
     for (std::uint32_t k : order_) {
-      if (ring_curvature[k] < static_cast<float>(params_.plane_curvature) && !excluded_[k]) out.planes.push_back(ring[k]);
+      if (ring_curvature[k] < static_cast<float>(params_.plane_curvature) && !excluded_[k]) {
+        out.planes.push_back(ring[k]);
+        out.plane_curvatures.push_back(ring_curvature[k]);
+      }
     }
   }
 }

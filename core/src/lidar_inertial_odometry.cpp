@@ -334,12 +334,12 @@ void LidarInertialOdometry::deskew_features(const Scan& scan, const ScanFeatures
   auto deskewed = [&](const LidarPoint& p, const Eigen::Vector3d& in_lidar) {
     return relative.at(t0 + static_cast<double>(p.time)) * (lidar_to_imu_ * in_lidar);
   };
-  for (auto i : indices.planes) {
-    const LidarPoint& p = scan.points[i];
+  for (std::size_t n = 0; n < indices.planes.size(); ++n) {
+    const LidarPoint& p = scan.points[indices.planes[n]];
     if (occupied.insert(voxel_of(Eigen::Vector3d(p.x, p.y, p.z), inverse_map_spacing))) {
       const Eigen::Vector3d in_lidar = lidar_point(p);
       planes.push_back(deskewed(p, in_lidar));
-      plane_curvatures.push_back(extractor_.curvature()[i]);
+      plane_curvatures.push_back(indices.plane_curvatures[n]);
       out.map_plane_sources.push_back({p.ring, in_lidar});
     }
   }

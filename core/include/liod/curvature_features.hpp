@@ -55,6 +55,7 @@ int curvature_neighbourhood_size(double range_m, CurvatureNeighbourhood mode);
 struct ScanFeatures {
   std::vector<std::uint32_t> edges;   // indices into Scan::points
   std::vector<std::uint32_t> planes;
+  std::vector<float> plane_curvatures;  // of each of planes
 };
 
 /// Reuses its buffers from scan to scan, so steady-state extraction does not allocate.
@@ -63,8 +64,6 @@ class FeatureExtractor {
   explicit FeatureExtractor(const FeatureParams& params)
       : params_(params), self_crop_reach_(params.self_crop ? params.self_crop->reach() : 0.0F) {}
   void extract(const Scan& scan, ScanFeatures& out);
-  /// Curvature of every point of the last scan (NaN where undefined), for diagnostics and tests.
-  const std::vector<float>& curvature() const { return curvature_; }
 
  private:
   void process_ring(const Scan& scan, const std::vector<std::uint32_t>& ring, ScanFeatures& out);
@@ -75,7 +74,6 @@ class FeatureExtractor {
   FeatureParams params_;
   float self_crop_reach_;  // CropBox::reach of params_.self_crop
   std::vector<std::vector<std::uint32_t>> rings_;
-  std::vector<float> curvature_;
   std::vector<float> range_;
   std::vector<float> ring_curvature_;
   std::vector<float> ring_x_, ring_y_, ring_z_, ring_time_, ring_range_;  // per ring position
