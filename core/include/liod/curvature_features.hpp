@@ -55,7 +55,7 @@ int curvature_neighbourhood_size(double range_m, CurvatureNeighbourhood mode);
 struct ScanFeatures {
   std::vector<std::uint32_t> edges;   // indices into Scan::points
   std::vector<std::uint32_t> planes;
-  std::vector<float> plane_curvatures;  // of each of planes
+  std::vector<float> plane_curvatures;  // each plane candidate's curvature, in the order of planes
 };
 
 /// Reuses its buffers from scan to scan, so steady-state extraction does not allocate.
