@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "liod/config.hpp"
+#include "liod/daemon/percentile.hpp"
 #include "liod/drivers/imu_csv.hpp"
 #include "liod/drivers/pcap_reader.hpp"
 #include "liod/drivers/rs_helios.hpp"
@@ -90,21 +91,16 @@ void BM_FrontEndPerScan(benchmark::State& state) {
     }
     wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
-  auto pct = [](std::vector<double>& ms, double q) {
-    if (ms.empty()) return 0.0;
-    std::sort(ms.begin(), ms.end());
-    return ms[static_cast<std::size_t>(q * static_cast<double>(ms.size() - 1))];
-  };
   std::size_t points = 0;
   for (const auto& s : d.scans) points += s.points.size();
   state.counters["scans"] = static_cast<double>(per_scan_ms.size());
   state.counters["points_per_scan"] = static_cast<double>(points) / static_cast<double>(std::max<std::size_t>(1, d.scans.size()));
-  state.counters["median_ms"] = pct(per_scan_ms, 0.5);
-  state.counters["p99_ms"] = pct(per_scan_ms, 0.99);
-  state.counters["max_ms"] = pct(per_scan_ms, 1.0);
-  state.counters["front_median_ms"] = pct(front_ms, 0.5);
-  state.counters["front_p99_ms"] = pct(front_ms, 0.99);
-  state.counters["map_median_ms"] = pct(map_ms, 0.5);
+  state.counters["median_ms"] = liod::percentile(per_scan_ms, 0.5);
+  state.counters["p99_ms"] = liod::percentile(per_scan_ms, 0.99);
+  state.counters["max_ms"] = liod::percentile(per_scan_ms, 1.0);
+  state.counters["front_median_ms"] = liod::percentile(front_ms, 0.5);
+  state.counters["front_p99_ms"] = liod::percentile(front_ms, 0.99);
+  state.counters["map_median_ms"] = liod::percentile(map_ms, 0.5);
   state.counters["x_real_time"] = wall_s > 0 ? static_cast<double>(d.scans.size()) * 0.1 / wall_s : 0.0;
 }
 BENCHMARK(BM_FrontEndPerScan)->Unit(benchmark::kSecond)->Iterations(1);
