@@ -27,6 +27,19 @@ Eigen::Vector3f summed_differences(const float* x, const float* y, const float* 
   return {sx, sy, sz};
 }
 
+// The curvature (the paper's c, eq. 1) of ring positions [begin, end), which share the half width
+// kHalf: one loop over the positions, so that the compiler computes several of them at once. Each
+// position's sum is still added in its own order (m ascending), so the values do not change.
+template <int kHalf>
+void ring_curvatures(const float* __restrict x, const float* __restrict y, const float* __restrict z,
+                     const float* __restrict range, int begin, int end, float* __restrict curvature) {
+  for (int k = begin; k < end; ++k) {
+    const Eigen::Vector3f sum = summed_differences<kHalf>(x, y, z, k);
+    curvature[k] = std::sqrt(sum.x() * sum.x() + sum.y() * sum.y() + sum.z() * sum.z()) /
+                   (static_cast<float>(2 * kHalf) * range[k]);
+  }
+}
+
 }  // namespace
 
 int curvature_neighbourhood_size(double range_m, CurvatureNeighbourhood mode) {
@@ -115,29 +128,35 @@ void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uin
     }
   }
   // Beams nearly parallel to the surface: both neighbours' ranges differ a lot from this one.
-  for (int k = 1; k + 1 < n; ++k) {
+  std::uint8_t* excluded = excluded_.data();
+  for (int k = 1; k + 1 < n; ++k) {  // without a branch, several positions at a time
     const float r = range[k];
-    if (std::abs(range[k - 1] - r) > 0.02F * r && std::abs(range[k + 1] - r) > 0.02F * r) {
-      excluded_[static_cast<std::size_t>(k)] = 1;
-    }
+    const bool parallel = (std::abs(range[k - 1] - r) > 0.02F * r) & (std::abs(range[k + 1] - r) > 0.02F * r);
+    excluded[k] = static_cast<std::uint8_t>(excluded[k] | static_cast<std::uint8_t>(parallel));
   }
 
   auto& ring_curvature = ring_curvature_;
   ring_curvature.assign(static_cast<std::size_t>(n), std::numeric_limits<float>::quiet_NaN());
-  for (int k = kMaxHalf; k < n - kMaxHalf; ++k) {
-    const float r = range[k];
-    const int half = curvature_neighbourhood_size(r, params_.neighbourhood) / 2;
-    if (gaps_before_[static_cast<std::size_t>(k + half)] != gaps_before_[static_cast<std::size_t>(k - half)]) continue;
-    Eigen::Vector3f sum;
+  // Runs of positions whose range gives the same neighbourhood: along a ring the range changes
+  // smoothly, so the runs are long.
+  auto half_at = [&](int k) { return curvature_neighbourhood_size(range[k], params_.neighbourhood) / 2; };
+  float* curvature = ring_curvature.data();
+  for (int begin = kMaxHalf; begin < n - kMaxHalf;) {
+    const int half = half_at(begin);
+    int end = begin + 1;
+    while (end < n - kMaxHalf && half_at(end) == half) ++end;
     switch (half) {
-      case 5: sum = summed_differences<5>(x, y, z, k); break;
-      case 4: sum = summed_differences<4>(x, y, z, k); break;
-      case 3: sum = summed_differences<3>(x, y, z, k); break;
-      default: sum = summed_differences<2>(x, y, z, k); break;
+      case 5: ring_curvatures<5>(x, y, z, range, begin, end, curvature); break;
+      case 4: ring_curvatures<4>(x, y, z, range, begin, end, curvature); break;
+      case 3: ring_curvatures<3>(x, y, z, range, begin, end, curvature); break;
+      default: ring_curvatures<2>(x, y, z, range, begin, end, curvature); break;
     }
-    const float c = std::sqrt(sum.x() * sum.x() + sum.y() * sum.y() + sum.z() * sum.z()) /
-                    (static_cast<float>(2 * half) * r);
-    ring_curvature[static_cast<std::size_t>(k)] = c;
+    for (int k = begin; k < end; ++k) {
+      if (gaps_before_[static_cast<std::size_t>(k + half)] != gaps_before_[static_cast<std::size_t>(k - half)]) {
+        curvature[k] = std::numeric_limits<float>::quiet_NaN();
+      }
+    }
+    begin = end;
   }
 
   // Per sector: the sharpest points become edges (spread out), the flattest ones planes.

@@ -17,10 +17,18 @@ Moments moments(const std::array<Eigen::Vector3d, LocalMap::kMaxNeighbours>& pts
   Moments m{Eigen::Vector3d::Zero(), Eigen::Matrix3d::Zero()};
   for (int i = 0; i < n; ++i) m.mean += pts[static_cast<std::size_t>(i)];
   m.mean /= n;
+  // The six distinct sums of the symmetric covariance, each added in the neighbours' order.
+  double xx = 0.0, xy = 0.0, xz = 0.0, yy = 0.0, yz = 0.0, zz = 0.0;
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d d = pts[static_cast<std::size_t>(i)] - m.mean;
-    m.covariance += d * d.transpose();
+    xx += d.x() * d.x();
+    xy += d.x() * d.y();
+    xz += d.x() * d.z();
+    yy += d.y() * d.y();
+    yz += d.y() * d.z();
+    zz += d.z() * d.z();
   }
+  m.covariance << xx, xy, xz, xy, yy, yz, xz, yz, zz;
   m.covariance /= n;
   return m;
 }
