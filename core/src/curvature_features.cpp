@@ -167,15 +167,15 @@ void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uin
     order_.clear();
     for (int k = begin; k < end; ++k) {
       const float c = ring_curvature[static_cast<std::size_t>(k)];
-      if (!std::isnan(c) && !excluded_[static_cast<std::size_t>(k)]) order_.push_back(static_cast<std::uint32_t>(k));
+      if (!std::isnan(c) && !excluded_[static_cast<std::size_t>(k)]) order_.push_back({c, static_cast<std::uint32_t>(k)});
     }
-    std::sort(order_.begin(), order_.end(), [&](std::uint32_t a, std::uint32_t b) {
-      return ring_curvature[a] > ring_curvature[b];
-    });
+    std::sort(order_.begin(), order_.end(),
+              [](const Candidate& a, const Candidate& b) { return a.curvature > b.curvature; });
     int picked = 0;
-    for (std::uint32_t k : order_) {
+    for (const Candidate& candidate : order_) {
       if (picked >= params_.max_edges_per_sector) break;
-      if (ring_curvature[k] <= static_cast<float>(params_.edge_curvature)) break;
+      if (candidate.curvature <= static_cast<float>(params_.edge_curvature)) break;
+      const std::uint32_t k = candidate.position;
       if (excluded_[k]) continue;
       out.edges.push_back(ring[k]);
       ++picked;
@@ -184,10 +184,10 @@ void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uin
       const int hi = std::min(n - 1, static_cast<int>(k) + kMaxHalf);
       for (int m = lo; m <= hi; ++m) excluded_[static_cast<std::size_t>(m)] = 1;
     }
-    for (std::uint32_t k : order_) {
-      if (ring_curvature[k] < static_cast<float>(params_.plane_curvature) && !excluded_[k]) {
-        out.planes.push_back(ring[k]);
-        out.plane_curvatures.push_back(ring_curvature[k]);
+    for (const Candidate& candidate : order_) {
+      if (candidate.curvature < static_cast<float>(params_.plane_curvature) && !excluded_[candidate.position]) {
+        out.planes.push_back(ring[candidate.position]);
+        out.plane_curvatures.push_back(candidate.curvature);
       }
     }
   }

@@ -79,7 +79,13 @@ class FeatureExtractor {
   std::vector<float> ring_x_, ring_y_, ring_z_, ring_time_, ring_range_;  // per ring position
   std::vector<int> gaps_before_;                                          // per ring position
   std::vector<std::uint8_t> excluded_;  // per ring position
-  std::vector<std::uint32_t> order_;
+  /// A sector's feature candidates, sorted sharpest first; each carries its curvature so that the
+  /// sort compares without looking it up.
+  struct Candidate {
+    float curvature;
+    std::uint32_t position;  // in the ring
+  };
+  std::vector<Candidate> order_;
 };
 
 }  // namespace liod
