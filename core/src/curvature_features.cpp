@@ -115,12 +115,20 @@ void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uin
 
   // Occlusion: at a range jump, the far side's points are hidden behind the near object and
   // their apparent edge moves with the viewpoint, so they are unreliable features.
+  // The jumps are found first, several positions at a time (without a branch), then the few
+  // there are handled.
+  const float occlusion_jump = static_cast<float>(params_.occlusion_jump_m);
+  range_jumps_.resize(static_cast<std::size_t>(n));
+  std::uint8_t* jumps = range_jumps_.data();
   for (int k = 0; k + 1 < n; ++k) {
     const float r0 = range[k];
     const float r1 = range[k + 1];
-    const float jump = static_cast<float>(params_.occlusion_jump_m) * std::max(1.0F, std::min(r0, r1) / 10.0F);
-    if (std::abs(r0 - r1) > jump) {
-      if (r0 > r1) {
+    const float jump = occlusion_jump * std::max(1.0F, std::min(r0, r1) / 10.0F);
+    jumps[k] = static_cast<std::uint8_t>(std::abs(r0 - r1) > jump);
+  }
+  for (int k = 0; k + 1 < n; ++k) {
+    if (jumps[k]) {
+      if (range[k] > range[k + 1]) {
         for (int m = std::max(0, k - kMaxHalf + 1); m <= k; ++m) excluded_[static_cast<std::size_t>(m)] = 1;
       } else {
         for (int m = k + 1; m <= std::min(n - 1, k + kMaxHalf); ++m) excluded_[static_cast<std::size_t>(m)] = 1;

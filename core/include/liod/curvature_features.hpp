@@ -78,7 +78,8 @@ class FeatureExtractor {
   std::vector<float> ring_curvature_;
   std::vector<float> ring_x_, ring_y_, ring_z_, ring_time_, ring_range_;  // per ring position
   std::vector<int> gaps_before_;                                          // per ring position
-  std::vector<std::uint8_t> excluded_;  // per ring position
+  std::vector<std::uint8_t> excluded_;     // per ring position
+  std::vector<std::uint8_t> range_jumps_;  // per ring position: an occlusion's jump to the next one
   /// A sector's feature candidates, sorted sharpest first; each carries its curvature so that the
   /// sort compares without looking it up.
   struct Candidate {
