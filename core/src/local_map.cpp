@@ -16,6 +16,9 @@ inline void prefetch(const void* address) {
 #endif
 }
 
+// |(a, b, c)|^2 summed in the order of Eigen's squaredNorm.
+inline float squared_norm(float a, float b, float c) { return a * a + (b * b + c * c); }
+
 }  // namespace
 
 LocalMap::LocalMap(double voxel_size, int max_points_per_voxel, double min_point_spacing)
@@ -107,8 +110,15 @@ void LocalMap::add(const std::vector<Eigen::Vector3d>& points, std::uint64_t key
     if (voxel.count >= max_points_per_voxel_) continue;
     const Eigen::Vector3f pf = p.cast<float>();
     bool crowded = false;
-    for (std::uint32_t i = 0; i < voxel.count && !crowded; ++i) {
-      crowded = (voxel.point(i) - pf).squaredNorm() < min_spacing_squared_;
+    // A whole block of distances at a time (several per instruction); those past count go unread.
+    for (std::uint32_t b = 0; b * kBlock < voxel.count && !crowded; ++b) {
+      const Voxel::Block& block = voxel.blocks[b];
+      std::array<float, kBlock> d2;
+      for (std::size_t l = 0; l < kBlock; ++l) {
+        d2[l] = squared_norm(block.x[l] - pf.x(), block.y[l] - pf.y(), block.z[l] - pf.z());
+      }
+      const std::uint32_t filled = std::min<std::uint32_t>(kBlock, voxel.count - b * kBlock);
+      for (std::uint32_t l = 0; l < filled; ++l) crowded = crowded || d2[l] < min_spacing_squared_;
     }
     if (crowded) continue;
     voxel.set(voxel.count, pf);
@@ -204,7 +214,6 @@ int LocalMap::NeighbourSearch::nearest(const Eigen::Vector3d& query, int k, doub
     }
   }
   const float voxel_size = static_cast<float>(1.0 / inverse_voxel_size);
-  auto squared = [](float a, float b, float c) { return a * a + (b * b + c * c); };  // as Eigen's squaredNorm
   // From the query to a voxel's box, per axis 0 inside it: a sum of one term per axis, so the
   // 3 x 3 terms of the block are computed once (squared), not for each of its 27 voxels.
   auto axis_terms = [&](float q, std::int32_t centre) {
@@ -231,7 +240,7 @@ int LocalMap::NeighbourSearch::nearest(const Eigen::Vector3d& query, int k, doub
     for (std::uint32_t b = 0; b * kBlock < count; ++b) {  // whole blocks: the tail's d2 go unread
       const Voxel::Block& block = voxel->blocks[b];
       for (int l = 0; l < kBlock; ++l) {
-        d2[b * kBlock + static_cast<std::uint32_t>(l)] = squared(block.x[static_cast<std::size_t>(l)] - qx,
+        d2[b * kBlock + static_cast<std::uint32_t>(l)] = squared_norm(block.x[static_cast<std::size_t>(l)] - qx,
                                                                 block.y[static_cast<std::size_t>(l)] - qy,
                                                                 block.z[static_cast<std::size_t>(l)] - qz);
       }
