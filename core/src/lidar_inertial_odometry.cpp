@@ -75,7 +75,11 @@ constexpr double kBeamMaxElevationRad = -0.01;
 // 4th 8.9 ms, no calibration 8.4 ms).
 constexpr std::uint32_t kBeamPointStride = 4;
 
-FeatureParams feature_params(const OdometryConfig& o, const ExtrinsicsConfig& extrinsics) {
+}  // namespace
+
+FeatureParams LidarInertialOdometry::feature_params(const Config& config) {
+  const OdometryConfig& o = config.odometry;
+  const ExtrinsicsConfig& extrinsics = config.extrinsics;
   FeatureParams p;
   p.neighbourhood = o.curvature == CurvatureMode::kAdaptive ? CurvatureNeighbourhood::kDistanceAdaptive
                                                              : CurvatureNeighbourhood::kFixed;
@@ -96,6 +100,8 @@ FeatureParams feature_params(const OdometryConfig& o, const ExtrinsicsConfig& ex
   }
   return p;
 }
+
+namespace {
 
 std::vector<Eigen::Vector3d> transformed(const std::vector<Eigen::Vector3d>& points, const NavState& s) {
   std::vector<Eigen::Vector3d> out;
@@ -230,7 +236,7 @@ LidarInertialOdometry::LidarInertialOdometry(const Config& config)
     : config_(config),
       extrinsics_(config.extrinsics),
       lidar_to_imu_{config.extrinsics.lidar_to_imu_rotation, config.extrinsics.lidar_to_imu_translation},
-      extractor_(feature_params(config.odometry, config.extrinsics)),
+      extractor_(feature_params(config)),
       plane_map_(config.odometry.map_voxel_m, config.odometry.map_points_per_voxel, config.odometry.map_min_point_spacing_m),
       edge_map_(config.odometry.map_voxel_m, config.odometry.map_points_per_voxel, config.odometry.map_min_point_spacing_m) {
   noise_.gyro_noise_density = config.imu.gyro_noise_density;
@@ -437,7 +443,13 @@ void LidarInertialOdometry::initialize(const Scan& scan, OdometryResult& result)
   result.status |= kStatusInitializing;
 }
 
-std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
+std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) { return process(scan, nullptr); }
+
+std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan, const ScanFeatures& extracted) {
+  return process(scan, &extracted);
+}
+
+std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan, const ScanFeatures* extracted) {
   OdometryResult result;
   result.points = scan.points.size();
   if (scan.points.empty() || imu_.empty()) return std::nullopt;
@@ -457,7 +469,7 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
       // this scan rather than wait (perhaps for hours) for the old time to come round again.
       speed_search_.reset();
       initialized_ = false;
-      return process(scan);
+      return process(scan, extracted);
     }
     // Over an IMU gap the hypotheses' placements would rest on a held sample: decide without it.
     const bool imu_gap = !imu_gaps(imu_, state_.time, end, config_.imu.max_gap_s).empty();
@@ -496,23 +508,23 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan) {
       if (standstill && rocked) settle_gyro_bias_at_rest(held.front().start_time + extrinsics_.lidar_time_offset_s, end);
       for (std::size_t i = standstill ? 0 : held.size() - 1; i < held.size(); ++i) {
         OdometryResult unreported;  // the first keyframe, and the standstill's scans before this one
-        process_scan(held[i], unreported);
+        process_scan(held[i], nullptr, unreported);
       }
       result.status |= kStatusInitializing;
-      process_scan(scan, result);
+      process_scan(scan, extracted, result);
       return result;
     }
     speed_search_->held.push_back(scan);
     return std::nullopt;  // no pose until the speed is known
   }
   if (!(scan_end_time(scan) > state_.time)) return std::nullopt;  // a scan from the past (clock jump)
-  process_scan(scan, result);
+  process_scan(scan, extracted, result);
   return result;
 }
 
 LidarInertialOdometry::StructurePoints LidarInertialOdometry::vertical_structure_points(const Scan& scan) const {
   const auto& o = config_.odometry;
-  const auto crop = feature_params(o, extrinsics_).self_crop;
+  const auto crop = feature_params(config_).self_crop;
   const double t0 = scan.start_time + extrinsics_.lidar_time_offset_s;
   std::vector<TimedPoint> candidates;
   std::vector<Eigen::Vector3d> levelled;  // the motion blur does not change what is vertical
@@ -682,7 +694,7 @@ void LidarInertialOdometry::start_at_speed(double speed) {
   covariance_.block<3, 3>(0, 6).setZero();
 }
 
-void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& result) {
+void LidarInertialOdometry::process_scan(const Scan& scan, const ScanFeatures* extracted, OdometryResult& result) {
   const double t_end = scan_end_time(scan);
 
   auto t = Clock::now();
@@ -702,12 +714,15 @@ void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& resul
   PoseTable relative = deskew_trajectory(scan, start, predicted, intervals);
   result.deskew_ms = elapsed_ms(t);
 
-  t = Clock::now();
-  extractor_.extract(scan, scan_features_);
-  result.features_ms = elapsed_ms(t);
+  if (extracted == nullptr) {
+    t = Clock::now();
+    extractor_.extract(scan, scan_features_);
+    result.features_ms = elapsed_ms(t);
+  }
+  const ScanFeatures& indices = extracted != nullptr ? *extracted : scan_features_;
   t = Clock::now();
   Features features;
-  deskew_features(scan, scan_features_, relative, features);
+  deskew_features(scan, indices, relative, features);
   result.deskew_ms += elapsed_ms(t);
   result.edge_features = features.edges.size();
   result.plane_features = features.planes.size();
@@ -749,7 +764,7 @@ void LidarInertialOdometry::process_scan(const Scan& scan, OdometryResult& resul
       corrected_start.velocity = update.state.velocity - update.state.gravity * preintegration.duration() -
                                  start.rotation * preintegration.delta_velocity(start.gyro_bias, start.accel_bias);
       relative = deskew_trajectory(scan, corrected_start, preintegration.predict(corrected_start, corrected_start.gravity), intervals);
-      deskew_features(scan, scan_features_, relative, features);
+      deskew_features(scan, indices, relative, features);
       update = iterated_update(predicted, predicted_covariance, features.planes, plane_map_, features.edges, edge_map_,
                                params);
     }

@@ -61,6 +61,7 @@ liod::Scan sweep(double start, const std::vector<Post>& posts, std::uint64_t seq
 class StartUp : public ::testing::Test {
  protected:
   liod::LidarInertialOdometry odometry{liod::Config{}};
+  liod::LidarInertialOdometry* fed_too = nullptr;  // a second odometry given the same IMU samples
   double imu_time = 0.0;
 
   void imu_until(double t) {
@@ -69,6 +70,7 @@ class StartUp : public ::testing::Test {
       s.time = imu_time;
       s.accel = Eigen::Vector3d(0.0, 0.0, 9.80665);
       odometry.add_imu(s);
+      if (fed_too != nullptr) fed_too->add_imu(s);
     }
   }
   std::optional<liod::OdometryResult> scan_at(double start, const std::vector<Post>& posts = {}) {
@@ -144,6 +146,44 @@ TEST_F(StartUp, AScanAfterMoreThanTheImuKeptIsFlaggedAsAcrossAnImuGap) {
   ASSERT_TRUE(after.has_value());
   EXPECT_NE(after->status & liod::kStatusImuGap, 0U);
   EXPECT_TRUE(after->state.position.allFinite());
+}
+
+// The daemon extracts each scan's features on the LiDAR thread and hands them over: the states
+// are those of the odometry extracting them itself, the held scans of the start included, and
+// what is handed over is what is registered.
+TEST_F(StartUp, FeaturesExtractedElsewhereGiveTheSameStates) {
+  const std::vector<Post> posts{{8.0, 4.0}, {-6.0, 5.0}, {12.0, -4.5}, {-10.0, -6.0}, {20.0, 3.0}, {3.0, -9.0}};
+  const liod::Config config;
+  liod::LidarInertialOdometry handed_over(config);
+  fed_too = &handed_over;
+  liod::FeatureExtractor extractor(liod::LidarInertialOdometry::feature_params(config));
+  liod::ScanFeatures features;
+  int compared = 0;
+  for (int i = 0; i < 12; ++i) {
+    const double start = 1.0 + 0.1 * i;
+    imu_until(start + kScanPeriod + 0.01);
+    const liod::Scan scan = sweep(start, posts, static_cast<std::uint64_t>(i));
+    const auto own = odometry.process(scan);
+    extractor.extract(scan, features);
+    const auto given = handed_over.process(scan, features);
+    ASSERT_EQ(own.has_value(), given.has_value()) << "scan " << i;
+    if (!own) continue;
+    EXPECT_EQ(own->status, given->status) << "scan " << i;
+    EXPECT_EQ(own->plane_features, given->plane_features) << "scan " << i;
+    EXPECT_EQ(own->edge_features, given->edge_features) << "scan " << i;
+    EXPECT_EQ(own->state.position, given->state.position) << "scan " << i;
+    EXPECT_EQ(own->state.velocity, given->state.velocity) << "scan " << i;
+    EXPECT_EQ(own->state.rotation, given->state.rotation) << "scan " << i;
+    EXPECT_EQ(given->features_ms, 0.0);
+    ++compared;
+  }
+  EXPECT_GE(compared, 9);
+  // Handed no features, the scan has nothing to register.
+  imu_until(2.2 + kScanPeriod + 0.01);
+  const auto blind = handed_over.process(sweep(2.2, posts, 12), liod::ScanFeatures{});
+  ASSERT_TRUE(blind.has_value());
+  EXPECT_EQ(blind->plane_features + blind->edge_features, 0U);
+  EXPECT_NE(blind->status & liod::kStatusFewFeatures, 0U);
 }
 
 }  // namespace

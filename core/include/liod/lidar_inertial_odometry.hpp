@@ -79,6 +79,12 @@ class LidarInertialOdometry {
   /// data around the scan, or a rolling start's speed not found yet: the first scan's result
   /// has the attitude only). Points must carry per-point times.
   std::optional<OdometryResult> process(const Scan& scan);
+  /// The same with the scan's features already extracted by an extractor made with
+  /// feature_params() (the daemon extracts on the LiDAR thread while this one registers the scan
+  /// before); result.features_ms is then 0.
+  std::optional<OdometryResult> process(const Scan& scan, const ScanFeatures& extracted);
+  /// The feature extractor's parameters for this configuration.
+  static FeatureParams feature_params(const Config& config);
 
   /// The gravity vector in the world frame (estimated) that the states are propagated with.
   const Eigen::Vector3d& gravity() const { return state_.gravity; }
@@ -121,7 +127,9 @@ class LidarInertialOdometry {
   void settle_gyro_bias_at_rest(double from, double to);
   /// What the gyro's roll-and-pitch rocking says of the motion up to `time` (body_rocking.hpp).
   BodyMotion body_motion_until(double time) const;
-  void process_scan(const Scan& scan, OdometryResult& result);
+  std::optional<OdometryResult> process(const Scan& scan, const ScanFeatures* extracted);
+  /// `extracted`: the scan's features, or nullptr to extract them here.
+  void process_scan(const Scan& scan, const ScanFeatures* extracted, OdometryResult& result);
   PoseTable deskew_trajectory(const Scan& scan, const NavState& start, const NavState& predicted_end,
                               const std::vector<ImuInterval>& intervals) const;
   void deskew_features(const Scan& scan, const ScanFeatures& indices, const PoseTable& relative, Features& out) const;

@@ -9,7 +9,9 @@
 //
 // A source is live (UDP socket, serial port, SocketCAN) or a file (pcap, IMU CSV); either way it
 // hands raw packets / samples to LidarOutput / ImuOutput, which own the decoding, time
-// correction and ring hand-off, so downstream cannot tell replay from live.
+// correction and ring hand-off, so downstream cannot tell replay from live. LidarOutput also
+// extracts each sweep's features (they need the scan alone), so that the odometry thread
+// registers scan k while the LiDAR thread prepares scan k+1.
 //
 // Ordering (what the odometry sees, in which order):
 // - Live (`Ordering::Arrival`): IMU samples are fed as they arrive; the IMU thread itself turns

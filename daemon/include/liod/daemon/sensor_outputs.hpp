@@ -13,6 +13,7 @@
 #include <span>
 
 #include "liod/config.hpp"
+#include "liod/curvature_features.hpp"
 #include "liod/drivers/rs_helios.hpp"
 #include "liod/drivers/spsc_ring.hpp"
 #include "liod/drivers/time_sync.hpp"
@@ -24,6 +25,8 @@ std::int64_t steady_ns() noexcept;
 
 struct ScanItem {
   Scan scan;
+  ScanFeatures features;  ///< extracted on the LiDAR thread, while the odometry registers the scan before
+  double features_ms = 0.0;
   std::int64_t ready_steady_ns = 0;  ///< when the driver thread took the packet completing the sweep
   std::int64_t queued_ns = 0;        ///< how long that packet had waited in the socket (live)
   bool clock_jump = false;           ///< the LiDAR clock jumped during the sweep, or is off (pose::kClockJump)
@@ -92,6 +95,7 @@ class LidarOutput {
   std::optional<drivers::ClockStepBridge> bridge_;
   std::int64_t shift_ns_ = 0;  // offset + step correction as of the last packet: added to a sweep it ended
   std::unique_ptr<drivers::RsHeliosDecoder> decoder_;
+  FeatureExtractor extractor_;
   ScanItem item_;
   std::int64_t packet_steady_ = 0;
   std::int64_t packet_queued_ = 0;
