@@ -240,9 +240,9 @@ int LocalMap::NeighbourSearch::nearest(const Eigen::Vector3d& query, int k, doub
     for (std::uint32_t b = 0; b * kBlock < count; ++b) {  // whole blocks: the tail's d2 go unread
       const Voxel::Block& block = voxel->blocks[b];
       for (int l = 0; l < kBlock; ++l) {
-        d2[b * kBlock + static_cast<std::uint32_t>(l)] = squared_norm(block.x[static_cast<std::size_t>(l)] - qx,
-                                                                block.y[static_cast<std::size_t>(l)] - qy,
-                                                                block.z[static_cast<std::size_t>(l)] - qz);
+        const auto lane = static_cast<std::size_t>(l);
+        d2[b * kBlock + static_cast<std::uint32_t>(l)] =
+            squared_norm(block.x[lane] - qx, block.y[lane] - qy, block.z[lane] - qz);
       }
     }
     for (std::uint32_t j = 0; j < count; ++j) {
