@@ -127,7 +127,7 @@ void LidarOutput::on_sweep(Scan& scan) {
   using std::swap;
   swap(item_.scan, scan);
   // Feature extraction needs the scan alone, not the state: done here, it runs on this thread
-  // while the odometry thread registers the previous scan (a sixth of a scan's work there).
+  // while the odometry thread registers the previous scan (about a fifth of a scan's work there).
   const std::int64_t extract_start = steady_ns();
   extractor_.extract(item_.scan, item_.features);
   item_.features_ms = static_cast<double>(steady_ns() - extract_start) * 1e-6;
