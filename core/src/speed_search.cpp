@@ -140,6 +140,17 @@ std::optional<std::size_t> separate_peak(const std::vector<double>& hypotheses, 
   return peak;
 }
 
+bool stands_clear_of_aliases(const std::vector<double>& hypotheses, const std::vector<double>& scores, std::size_t best,
+                             double min_separation, double min_ratio) {
+  if (scores.size() != hypotheses.size() || best == 0 || best + 1 >= scores.size()) return false;
+  for (std::size_t i = 1; i + 1 < scores.size(); ++i) {
+    if (std::abs(hypotheses[i] - hypotheses[best]) < min_separation) continue;
+    if (scores[i] < scores[i - 1] || scores[i] < scores[i + 1]) continue;
+    if (scores[best] < min_ratio * scores[i]) return false;
+  }
+  return true;
+}
+
 GridSearchResult grid_search(const std::function<double(double)>& score, const GridSearchParams& params) {
   GridSearchResult best{0.0, -std::numeric_limits<double>::infinity()};
   for (const double x : coarse_grid(params)) {

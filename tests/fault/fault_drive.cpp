@@ -100,6 +100,14 @@ const FaultDrive* aliasing_posts_drive() {
   return simulated_drive("aliasing-posts-drive", "--route highway --seed 108 --duration 6 --max-speed 15");
 }
 
+const FaultDrive* backward_alias_drive() {
+  return simulated_drive("backward-alias-drive", "--route highway --seed 9 --duration 8 --max-speed 15");
+}
+
+const FaultDrive* grid_edge_alias_drive() {
+  return simulated_drive("grid-edge-alias-drive", "--route highway --seed 53 --duration 6 --max-speed 15");
+}
+
 const FaultDrive* tunnel_rest_drive() {
   return simulated_drive("tunnel-rest-drive", "--route tunnel --seed 1 --duration 25 --max-speed 15");
 }

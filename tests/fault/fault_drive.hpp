@@ -46,6 +46,14 @@ const FaultDrive* move_off_drive();
 /// whose first two scans alone overlap best at 2-3 m/s (speed_search).
 const FaultDrive* aliasing_posts_drive();
 
+/// `liod-sim --route highway --seed 9 --duration 8 --max-speed 15`: a rolling start at 15 m/s past
+/// posts 2 m apart, whose rails-free evidence briefly leads at their alias, -5 m/s.
+const FaultDrive* backward_alias_drive();
+
+/// `liod-sim --route highway --seed 53 --duration 6 --max-speed 15`: a rolling start at 15 m/s
+/// whose rails-free evidence is first highest at 50 m/s, the search's end, still rising.
+const FaultDrive* grid_edge_alias_drive();
+
 /// `liod-sim --route highway --seed 131 --duration 8 --max-speed 13`: a rolling start at 13 m/s
 /// whose rings cut the right rail's faces in spots fixed in the sensor's frame, so that even off
 /// the rails the first 2 s score a standstill best (speed_search).

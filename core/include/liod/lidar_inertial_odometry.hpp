@@ -161,6 +161,7 @@ class LidarInertialOdometry {
     bool evidence_standstill = false;    // the best speed off the rails so far, below 1 m/s
     bool rocked = false;                 // the IMU saw the body rock while the search went on (body_rocking.hpp)
     std::optional<double> moving_peak;   // while the body rocks: a second peak of that evidence (separate_peak)
+    std::optional<double> unclear_speed; // that evidence's best speed while it does not stand clear of its aliases
     std::vector<Scan> held;  // every scan since the first (at most kMaxSpeedSearch_s of them)
     std::vector<StructurePoints> structure;
     std::vector<double> evidence;      // off the rails, from the second scan on

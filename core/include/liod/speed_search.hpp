@@ -85,6 +85,14 @@ GridSearchResult refine_around(const std::function<double(double)>& score, doubl
 std::optional<std::size_t> separate_peak(const std::vector<double>& hypotheses, const std::vector<double>& scores,
                                          double min_abs, double min_share);
 
+/// Whether the score at index `best` (the highest) stands clear of its aliases: inside the grid,
+/// not at either end (a score still rising there peaks beyond it), and at least min_ratio times
+/// every other local maximum of scores at least min_separation from it. Guard-rail posts at a
+/// regular spacing land on their neighbours' places k scans before at the true speed minus
+/// spacing / (k scan periods), and for a scan or two such an alias can lead by a few per cent.
+bool stands_clear_of_aliases(const std::vector<double>& hypotheses, const std::vector<double>& scores, std::size_t best,
+                             double min_separation, double min_ratio);
+
 /// Maximises score(x) over the coarse grid on [min, max], then over the fine grid around the
 /// best coarse hypothesis. Exhaustive, so that a score with several local maxima (periodic posts)
 /// is safe.
