@@ -105,7 +105,7 @@ void add_vertical_velocity_constraint(const NavState& x, const UpdateParams& par
 UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior_covariance,
                              const std::vector<Eigen::Vector3d>& planes_body, const LocalMap& plane_map,
                              const std::vector<Eigen::Vector3d>& edges_body, const LocalMap& edge_map,
-                             const UpdateParams& params) {
+                             const UpdateParams& params, const LocalMap* post_axis_map) {
   const StateCovariance prior_information = prior_covariance.ldlt().solve(StateCovariance::Identity());
   const double inv_var = 1.0 / (params.lidar_noise_m * params.lidar_noise_m);
   UpdateResult result;
@@ -130,9 +130,12 @@ UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior
       std::optional<Eigen::Vector3d> sensor;
       if (params.edge_viewpoint_body) sensor = x.rotation * *params.edge_viewpoint_body + x.position;
       const Eigen::Vector3d up = -x.gravity.normalized();
+      const bool posts = sensor && params.posts && post_axis_map != nullptr && !post_axis_map->empty();
+      std::optional<LocalMap::NeighbourSearch> axes;
+      if (posts) axes.emplace(*post_axis_map);
       auto line = [&](LocalMap::NeighbourSearch& ns, const Eigen::Vector3d& q, const CorrespondenceParams& p) {
-        if (sensor && params.posts) {
-          if (auto post = post_correspondence(ns, q, up, *sensor, *params.posts)) return post;
+        if (posts) {
+          if (auto post = post_correspondence(*axes, q, up, *sensor, *params.posts)) return post;
         }
         return line_correspondence(ns, q, p, sensor ? &*sensor : nullptr);
       };

@@ -247,7 +247,8 @@ LidarInertialOdometry::LidarInertialOdometry(const Config& config)
       lidar_to_imu_{config.extrinsics.lidar_to_imu_rotation, config.extrinsics.lidar_to_imu_translation},
       extractor_(feature_params(config)),
       plane_map_(config.odometry.map_voxel_m, config.odometry.map_points_per_voxel, config.odometry.map_min_point_spacing_m),
-      edge_map_(config.odometry.map_voxel_m, config.odometry.map_points_per_voxel, config.odometry.map_min_point_spacing_m) {
+      edge_map_(config.odometry.map_voxel_m, config.odometry.map_points_per_voxel, config.odometry.map_min_point_spacing_m),
+      post_axis_map_(edge_map_) {
   noise_.gyro_noise_density = config.imu.gyro_noise_density;
   noise_.accel_noise_density = config.imu.accel_noise_density;
   noise_.gyro_bias_random_walk = config.imu.gyro_bias_random_walk;
@@ -261,7 +262,10 @@ LidarInertialOdometry::LidarInertialOdometry(const Config& config)
   update_params_.correspondence.fit_uncertainty = config.odometry.fit_uncertainty;
   if (config.odometry.edge_residual == EdgeResidual::kAlongRay) {
     update_params_.edge_viewpoint_body = config.extrinsics.lidar_to_imu_translation;
-    if (config.odometry.post_edges) update_params_.posts = PostParams{};
+    if (config.odometry.post_edges) {
+      update_params_.posts = PostParams{};
+      update_params_.posts->depth_m = config.odometry.post_depth_m;
+    }
   }
   update_params_.degeneracy_eigenvalue = config.odometry.degeneracy_eigenvalue;
   update_params_.project_degenerate = config.odometry.degeneracy_projection;
@@ -777,7 +781,7 @@ void LidarInertialOdometry::process_scan(const Scan& scan, const ScanFeatures* e
       params.ground_blind_too = body_motion_until(t_end) == BodyMotion::kRocking;
     }
     UpdateResult update = iterated_update(predicted, predicted_covariance, features.planes, plane_map_, features.edges,
-                                          edge_map_, params);
+                                          edge_map_, params, &post_axis_map_);
     if (velocity_std(predicted_covariance) > kTrustedVelocityStd && config_.odometry.deskew == DeskewMode::kImu) {
       // Rolling start: the deskew above assumed the prior speed. Re-deskew with the speed the
       // LiDAR just measured (start velocity implied by the updated end state) and update again.
@@ -787,7 +791,7 @@ void LidarInertialOdometry::process_scan(const Scan& scan, const ScanFeatures* e
       relative = deskew_trajectory(scan, corrected_start, preintegration.predict(corrected_start, corrected_start.gravity), intervals);
       deskew_features(scan, indices, relative, features);
       update = iterated_update(predicted, predicted_covariance, features.planes, plane_map_, features.edges, edge_map_,
-                               params);
+                               params, &post_axis_map_);
     }
     const bool degenerate = update.min_translation_eigenvalue < config_.odometry.degeneracy_eigenvalue;
     const bool turning = turning_faster_than(start, predicted, update.state, preintegration.duration(),
@@ -799,7 +803,7 @@ void LidarInertialOdometry::process_scan(const Scan& scan, const ScanFeatures* e
     if (prediction_nis(update.state, predicted, predicted_covariance) > config_.odometry.max_prediction_nis) {
       hold_imu_states(predicted_covariance);
       update = iterated_update(predicted, predicted_covariance, features.planes, plane_map_, features.edges, edge_map_,
-                               params);
+                               params, &post_axis_map_);
       ++inconsistent_imu_scans_;
       scans_since_imu_inconsistent_ = 0;
       result.status |= kStatusImuInconsistent;
@@ -836,6 +840,7 @@ void LidarInertialOdometry::process_scan(const Scan& scan, const ScanFeatures* e
     plane_map_ = LocalMap(config_.odometry.map_voxel_m, config_.odometry.map_points_per_voxel,
                           config_.odometry.map_min_point_spacing_m);
     edge_map_ = plane_map_;
+    post_axis_map_ = plane_map_;
   }
   if (config_.odometry.beam_calibration && map_trusted_ && !plane_map_.empty()) learn_beam_elevations(features);
   consider_keyframe(features, result);
@@ -884,11 +889,17 @@ void LidarInertialOdometry::add_keyframe(const Features& features) {
   kf.similarity_cloud_world = voxel_downsample(kf.similarity_cloud_world, config_.odometry.hausdorff_voxel_m);
   plane_map_.add(kf.planes_world, kf.id);
   edge_map_.add(kf.edges_world, kf.id);
+  if (update_params_.posts) {
+    kf.post_axes_world = post_axes(kf.edges_world, state_.rotation * *update_params_.edge_viewpoint_body + state_.position,
+                                   -state_.gravity.normalized(), update_params_.posts->depth_m);
+    post_axis_map_.add(kf.post_axes_world, kf.id);
+  }
   keyframes_.push_back(std::move(kf));
   while (keyframes_.size() > static_cast<std::size_t>(config_.odometry.window_keyframes)) {
     const Keyframe& oldest = keyframes_.front();
     plane_map_.remove_keyframe(oldest.planes_world, oldest.id);
     edge_map_.remove_keyframe(oldest.edges_world, oldest.id);
+    post_axis_map_.remove_keyframe(oldest.post_axes_world, oldest.id);
     keyframes_.pop_front();
   }
 }

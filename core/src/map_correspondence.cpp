@@ -103,14 +103,29 @@ std::optional<LinearResidual> plane_correspondence(LocalMap::NeighbourSearch& ma
   return LinearResidual{normal, offset, variance_scale};
 }
 
-std::optional<LinearResidual> post_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,
+std::vector<Eigen::Vector3d> post_axes(const std::vector<Eigen::Vector3d>& edges, const Eigen::Vector3d& viewpoint,
+                                       const Eigen::Vector3d& up, double depth_m) {
+  const Eigen::Matrix3d across_up = Eigen::Matrix3d::Identity() - up * up.transpose();
+  std::vector<Eigen::Vector3d> axes;
+  axes.reserve(edges.size());
+  for (const auto& p : edges) {
+    const auto ray = across_ray(across_up, p, viewpoint);
+    axes.push_back(ray ? Eigen::Vector3d(p + depth_m * *ray) : p);
+  }
+  return axes;
+}
+
+std::optional<LinearResidual> post_correspondence(LocalMap::NeighbourSearch& axes, const Eigen::Vector3d& query,
                                                   const Eigen::Vector3d& up, const Eigen::Vector3d& viewpoint,
                                                   const PostParams& params) {
+  const Eigen::Matrix3d across_up = Eigen::Matrix3d::Identity() - up * up.transpose();
+  const auto normal = across_ray(across_up, query, viewpoint);
+  if (!normal) return std::nullopt;  // looking straight down the post
+  const Eigen::Vector3d query_axis = query + params.depth_m * *normal;
   std::array<Eigen::Vector3d, LocalMap::kMaxNeighbours> points;
   const int wanted = std::clamp(params.neighbours, 2, LocalMap::kMaxNeighbours);
-  const int n = map.nearest(query, wanted, params.radius_m, points);
+  const int n = axes.nearest(query_axis, wanted, params.radius_m, points);
   if (n < wanted) return std::nullopt;
-  const Eigen::Matrix3d across_up = Eigen::Matrix3d::Identity() - up * up.transpose();
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   double lowest = std::numeric_limits<double>::infinity();
   double highest = -std::numeric_limits<double>::infinity();
@@ -125,10 +140,9 @@ std::optional<LinearResidual> post_correspondence(LocalMap::NeighbourSearch& map
   }
   if (highest - lowest < params.min_height_m) return std::nullopt;
   centroid /= n;
-  const auto normal = across_ray(across_up, query, viewpoint);
-  if (!normal) return std::nullopt;  // looking straight down the post
-  // The post's axis is known to its points' scatter over n (as a plane's offset).
-  return LinearResidual{*normal, -normal->dot(centroid), 1.0 + 1.0 / n};
+  // Residual n . (query + depth n - centroid): the query's axis estimate against the map's. The
+  // axis is known to its points' scatter over n (as a plane's offset).
+  return LinearResidual{*normal, params.depth_m - normal->dot(centroid), 1.0 + 1.0 / n};
 }
 
 std::optional<LinearResidual> line_correspondence(LocalMap::NeighbourSearch& map, const Eigen::Vector3d& query,

@@ -1,8 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <random>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -121,10 +123,14 @@ liod::LocalMap rail_with_post() {
 
 const Eigen::Vector3d kRoofSensor(0.0, 0.0, 1.83);  // the LiDAR's origin, 1.83 m above the road
 
+// With depth 0 the map's points are the posts' axes and an edge point is its own axis estimate.
 std::optional<liod::LinearResidual> post_at(const liod::LocalMap& map, const Eigen::Vector3d& query,
-                                            const Eigen::Vector3d& up = Eigen::Vector3d::UnitZ()) {
+                                            const Eigen::Vector3d& up = Eigen::Vector3d::UnitZ(),
+                                            const Eigen::Vector3d& sensor = kRoofSensor, double depth = 0.0) {
   liod::LocalMap::NeighbourSearch search(map);
-  return liod::post_correspondence(search, query, up, kRoofSensor, liod::PostParams{});
+  liod::PostParams params;
+  params.depth_m = depth;
+  return liod::post_correspondence(search, query, up, sensor, params);
 }
 
 TEST(MapCorrespondence, TwoPointsOfAShortPostGiveItsRangeAlongTheRay) {
@@ -150,6 +156,52 @@ TEST(MapCorrespondence, TwoPointsOfAShortPostGiveItsRangeAlongTheRay) {
   EXPECT_NEAR(std::abs(across->evaluate(beside)), 0.0, 2e-3);
   EXPECT_NEAR(far->normal.dot(up), 0.0, 1e-12);  // a range error in the horizontal only
   EXPECT_NEAR(far->normal.dot(ray), 1.0, 1e-9);
+}
+
+// Where the horizontal ray from `sensor` towards a square post's axis meets its near side, at
+// height z (the post stands at `centre`, half-width `half`, sides along x and y).
+Eigen::Vector3d near_side_hit(const Eigen::Vector3d& sensor, const Eigen::Vector2d& centre, double half, double z) {
+  const Eigen::Vector2d from = sensor.head<2>();
+  const Eigen::Vector2d d = (centre - from).normalized();
+  double enter = 0.0;  // slab method: the ray enters the square where it has entered both slabs
+  for (int k = 0; k < 2; ++k) {
+    const double t0 = (centre(k) - half - from(k)) / d(k);
+    const double t1 = (centre(k) + half - from(k)) / d(k);
+    enter = std::max(enter, std::min(t0, t1));
+  }
+  const Eigen::Vector2d hit = from + enter * d;
+  return {hit.x(), hit.y(), z};
+}
+
+TEST(MapCorrespondence, APostsAxisDoesNotMoveWithTheSideTheRingsMeet) {
+  // A guard-rail post 16 cm square, 4.3 m right of the lane. Three keyframes on the approach
+  // (20, 15 and 10 m before it) saw the face towards them, each on one ring; the scan sees it from 12 m past it,
+  // its back face, at the true pose.
+  const Eigen::Vector2d post(30.0, -4.3);
+  const double half = 0.08;
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  auto sensor_at = [](double x) { return Eigen::Vector3d(x, 0.0, 1.83); };
+  auto map_of = [&](double depth) {
+    std::vector<Eigen::Vector3d> axes;
+    for (const double x : {10.0, 15.0, 20.0}) {  // one ring each, at 0.1, 0.3 and 0.5 m
+      const std::vector<Eigen::Vector3d> edges{near_side_hit(sensor_at(x), post, half, 0.04 * x - 0.3)};
+      const auto seen = liod::post_axes(edges, sensor_at(x), up, depth);
+      axes.insert(axes.end(), seen.begin(), seen.end());
+    }
+    return edge_map_of(axes);
+  };
+  const Eigen::Vector3d sensor = sensor_at(42.0);
+  const Eigen::Vector3d query = near_side_hit(sensor, post, half, 0.3);
+  // The edge points as they are: the back face 16 cm behind the front one, 15 cm along the ray.
+  const auto points = post_at(map_of(0.0), query, up, sensor, 0.0);
+  // Each moved half the post's depth along its own ray: both near the axis, within 1.5 cm.
+  const auto axes = post_at(map_of(0.08), query, up, sensor, 0.08);
+  ASSERT_TRUE(points && axes);
+  EXPECT_GT(std::abs(points->evaluate(query)), 0.12);
+  EXPECT_LT(std::abs(axes->evaluate(query)), 0.015);
+  // The residual is still the range along the ray: 5 cm farther reads 5 cm.
+  const Eigen::Vector3d ray = Eigen::Vector3d(query.x() - sensor.x(), query.y() - sensor.y(), 0.0).normalized();
+  EXPECT_NEAR(axes->evaluate(query + 0.05 * ray) - axes->evaluate(query), 0.05, 1e-9);
 }
 
 TEST(MapCorrespondence, HorizontalEdgesAndScatteredPointsAreNoPost) {

@@ -59,9 +59,11 @@ struct UpdateResult {
   int degenerate_directions = 0;
 };
 
+/// post_axis_map: the edge map's points as post axes (post_axes), for params.posts; without it
+/// no edge is matched as a post.
 UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior_covariance,
                              const std::vector<Eigen::Vector3d>& planes_body, const LocalMap& plane_map,
                              const std::vector<Eigen::Vector3d>& edges_body, const LocalMap& edge_map,
-                             const UpdateParams& params);
+                             const UpdateParams& params, const LocalMap* post_axis_map = nullptr);
 
 }  // namespace liod

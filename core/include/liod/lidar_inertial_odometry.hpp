@@ -38,6 +38,7 @@ struct Keyframe {
   NavState state;
   std::vector<Eigen::Vector3d> planes_world;
   std::vector<Eigen::Vector3d> edges_world;
+  std::vector<Eigen::Vector3d> post_axes_world;  // edges_world as post axes (post_axes), with posts on
   std::vector<Eigen::Vector3d> similarity_cloud_world;  // downsampled, for the Hausdorff test
 };
 
@@ -182,6 +183,7 @@ class LidarInertialOdometry {
 
   LocalMap plane_map_;
   LocalMap edge_map_;
+  LocalMap post_axis_map_;  // the keyframes' post_axes_world
   std::deque<Keyframe> keyframes_;
   std::uint64_t next_keyframe_id_ = 0;
 };
