@@ -121,17 +121,26 @@ TEST(GridSearch, FindsTheGlobalMaximumAmongSideLobes) {
   EXPECT_NEAR(found.value, 14.12, 0.01);
 }
 
-TEST(GridSearch, ASeparatePeakBesideAStandstillIsFoundOnlyWhereItPeaksOnItsOwn) {
-  liod::GridSearchParams p;
-  p.min = -10.0;
-  p.max = 50.0;
-  p.coarse_step = 0.5;
-  const std::vector<double> hypotheses = liod::coarse_grid(p);
-  auto scores_of = [&](auto score) {
+// The rolling start's coarse grid of speed hypotheses (-10 to 50 m/s every 0.5), and a score's
+// values over it.
+struct SpeedGrid {
+  liod::GridSearchParams params{-10.0, 50.0, 0.5, 0.1};
+  std::vector<double> hypotheses = liod::coarse_grid(params);
+  template <typename Score>
+  std::vector<double> scores_of(Score score) const {
     std::vector<double> out;
     for (double x : hypotheses) out.push_back(score(x));
     return out;
-  };
+  }
+  std::size_t index_of(double x) const {
+    return static_cast<std::size_t>(std::lround((x - params.min) / params.coarse_step));
+  }
+};
+
+TEST(GridSearch, ASeparatePeakBesideAStandstillIsFoundOnlyWhereItPeaksOnItsOwn) {
+  const SpeedGrid grid;
+  const std::vector<double>& hypotheses = grid.hypotheses;
+  auto scores_of = [&](auto score) { return grid.scores_of(score); };
   auto standstill = [](double x, double width) { return std::exp(-x * x / (width * width)); };
   // Rail faces fixed in the sensor's frame score a standstill; the moving car's structure peaks
   // at its true speed, 13 m/s, with 85 % of it.
@@ -150,20 +159,11 @@ TEST(GridSearch, ASeparatePeakBesideAStandstillIsFoundOnlyWhereItPeaksOnItsOwn) 
 }
 
 TEST(GridSearch, ASpeedStandsClearOnlyWhenItLeadsItsAliasesAndPeaksInsideTheGrid) {
-  liod::GridSearchParams p;
-  p.min = -10.0;
-  p.max = 50.0;
-  p.coarse_step = 0.5;
-  const std::vector<double> hypotheses = liod::coarse_grid(p);
-  auto scores_of = [&](auto score) {
-    std::vector<double> out;
-    for (double x : hypotheses) out.push_back(score(x));
-    return out;
-  };
+  const SpeedGrid grid;
+  const std::vector<double>& hypotheses = grid.hypotheses;
+  auto scores_of = [&](auto score) { return grid.scores_of(score); };
   auto peak = [](double x, double at) { return std::exp(-std::pow(x - at, 2)); };
-  auto index_of = [&](double x) {
-    return static_cast<std::size_t>(std::lround((x - p.min) / p.coarse_step));
-  };
+  auto index_of = [&](double x) { return grid.index_of(x); };
   // Posts 4 m apart: the true 15 m/s and its alias at -5 m/s, 4 m in two scans (highway seed 19's
   // evidence at its sixth scan, 62 against 53; 256 against 199 two seconds on).
   const auto close = scores_of([&](double x) { return 62.0 * peak(x, 15.0) + 53.0 * peak(x, -5.0); });
