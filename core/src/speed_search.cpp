@@ -127,15 +127,27 @@ GridSearchResult refine_around(const std::function<double(double)>& score, doubl
   return result;
 }
 
+namespace {
+
+// The index of the highest interior local maximum of scores (both neighbours lower or equal, the
+// first of equals) among the hypotheses at least min_distance from `from`.
+std::optional<std::size_t> highest_local_maximum(const std::vector<double>& hypotheses, const std::vector<double>& scores,
+                                                 double from, double min_distance) {
+  std::optional<std::size_t> peak;
+  for (std::size_t i = 1; i + 1 < scores.size(); ++i) {
+    if (std::abs(hypotheses[i] - from) < min_distance || scores[i] < scores[i - 1] || scores[i] < scores[i + 1]) continue;
+    if (!peak || scores[i] > scores[*peak]) peak = i;
+  }
+  return peak;
+}
+
+}  // namespace
+
 std::optional<std::size_t> separate_peak(const std::vector<double>& hypotheses, const std::vector<double>& scores,
                                          double min_abs, double min_share) {
   if (scores.size() != hypotheses.size() || scores.size() < 3) return std::nullopt;
   const double highest = *std::max_element(scores.begin(), scores.end());
-  std::optional<std::size_t> peak;
-  for (std::size_t i = 1; i + 1 < scores.size(); ++i) {
-    if (std::abs(hypotheses[i]) < min_abs || scores[i] < scores[i - 1] || scores[i] < scores[i + 1]) continue;
-    if (!peak || scores[i] > scores[*peak]) peak = i;
-  }
+  const auto peak = highest_local_maximum(hypotheses, scores, 0.0, min_abs);
   if (!peak || !(scores[*peak] > 0.0) || scores[*peak] < min_share * highest) return std::nullopt;
   return peak;
 }
@@ -143,12 +155,8 @@ std::optional<std::size_t> separate_peak(const std::vector<double>& hypotheses, 
 bool stands_clear_of_aliases(const std::vector<double>& hypotheses, const std::vector<double>& scores, std::size_t best,
                              double min_separation, double min_ratio) {
   if (scores.size() != hypotheses.size() || best == 0 || best + 1 >= scores.size()) return false;
-  for (std::size_t i = 1; i + 1 < scores.size(); ++i) {
-    if (std::abs(hypotheses[i] - hypotheses[best]) < min_separation) continue;
-    if (scores[i] < scores[i - 1] || scores[i] < scores[i + 1]) continue;
-    if (scores[best] < min_ratio * scores[i]) return false;
-  }
-  return true;
+  const auto rival = highest_local_maximum(hypotheses, scores, hypotheses[best], min_separation);
+  return !rival || scores[best] >= min_ratio * scores[*rival];
 }
 
 GridSearchResult grid_search(const std::function<double(double)>& score, const GridSearchParams& params) {
