@@ -25,6 +25,7 @@ variants=(
   "no posts (edges on fitted lines only)|odometry: {post_edges: false}"
   "no beam calibration (published angles as they are)|odometry: {beam_calibration: false}"
   "no Hausdorff gating|odometry: {keyframe_gating: distance_angle}"
+  "window of 25 keyframes (the paper)|odometry: {window_keyframes: 25}"
   "constant-velocity deskew|odometry: {deskew: constant_velocity}"
   "no deskew|odometry: {deskew: none}"
 )

@@ -28,7 +28,7 @@ TEST(ConfigLoader, ShippedConfigLoadsAndMatchesDefaults) {
   const liod::Config defaults;
   EXPECT_EQ(config.lidar.msop_port, defaults.lidar.msop_port);
   EXPECT_DOUBLE_EQ(config.odometry.hausdorff_threshold_m, defaults.odometry.hausdorff_threshold_m);
-  EXPECT_EQ(config.odometry.window_keyframes, 25);
+  EXPECT_EQ(config.odometry.window_keyframes, 200);
   EXPECT_EQ(config.odometry.deskew, liod::DeskewMode::kImu);
 }
 

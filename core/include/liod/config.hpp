@@ -97,7 +97,7 @@ struct OdometryConfig {
   double keyframe_angle_deg = 10.0;
   double hausdorff_threshold_m = 0.6; // h1
   double hausdorff_voxel_m = 1.0;     // clouds are downsampled to this before the Hausdorff test
-  int window_keyframes = 25;
+  int window_keyframes = 200;
   /// A scan whose registration moves the pose further than this from the IMU prediction (squared
   /// Mahalanobis distance over the 6 pose dimensions) is not let to update the biases and gravity.
   double max_prediction_nis = 200.0;
