@@ -47,7 +47,8 @@ const FaultDrive* move_off_drive();
 const FaultDrive* aliasing_posts_drive();
 
 /// `liod-sim --route highway --seed 9 --duration 8 --max-speed 15`: a rolling start at 15 m/s past
-/// posts 2 m apart, whose rails-free evidence briefly leads at their alias, -5 m/s.
+/// posts 4 m apart, whose rails-free evidence briefly leads at their alias, -5 m/s (each scan's
+/// posts on the next ones' places two scans before).
 const FaultDrive* backward_alias_drive();
 
 /// `liod-sim --route highway --seed 53 --duration 6 --max-speed 15`: a rolling start at 15 m/s
