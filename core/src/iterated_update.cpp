@@ -31,7 +31,7 @@ using Correspondences = std::vector<std::optional<LinearResidual>>;
 // The points in the world at pose x, into `world` (reused from iteration to iteration).
 void to_world(const std::vector<Eigen::Vector3d>& points_body, const NavState& x, std::vector<Eigen::Vector3d>& world) {
   world.resize(points_body.size());
-  for (std::size_t i = 0; i < points_body.size(); ++i) world[i] = x.rotation * points_body[i] + x.position;
+  for (std::size_t i = 0; i < points_body.size(); ++i) world[i] = x.to_world(points_body[i]);
 }
 
 // Every point's correspondence (points_world: at the current pose). The points are taken voxel
@@ -128,7 +128,7 @@ UpdateResult iterated_update(const NavState& prior, const StateCovariance& prior
     accumulate(planes_body, x, planes_world, plane_map, params, plane_correspondence, search, plane_cache, eq);
     if (!edge_map.empty()) {
       std::optional<Eigen::Vector3d> sensor;
-      if (params.edge_viewpoint_body) sensor = x.rotation * *params.edge_viewpoint_body + x.position;
+      if (params.edge_viewpoint_body) sensor = x.to_world(*params.edge_viewpoint_body);
       const Eigen::Vector3d up = -x.gravity.normalized();
       const bool posts = sensor && params.posts && post_axis_map != nullptr && !post_axis_map->empty();
       std::optional<LocalMap::NeighbourSearch> axes;

@@ -115,7 +115,7 @@ namespace {
 std::vector<Eigen::Vector3d> transformed(const std::vector<Eigen::Vector3d>& points, const NavState& s) {
   std::vector<Eigen::Vector3d> out;
   out.reserve(points.size());
-  for (const auto& p : points) out.push_back(s.rotation * p + s.position);
+  for (const auto& p : points) out.push_back(s.to_world(p));
   return out;
 }
 
@@ -402,7 +402,7 @@ void LidarInertialOdometry::learn_beam_elevations(const Features& features) {
     if (horizontal < kBeamMinRangeM || source.lidar.z() > horizontal * max_elevation_slope) continue;
     if (source.ring >= seen.size() || seen[source.ring]++ % kBeamPointStride != 0) continue;  // add() would drop it
     picked.push_back({i, horizontal});
-    world.push_back(state_.rotation * features.map_planes[i] + state_.position);
+    world.push_back(state_.to_world(features.map_planes[i]));
   }
   // Their planes searched voxel by voxel (as the registration's), added in sweep order.
   std::vector<std::optional<LinearResidual>> planes(picked.size());
@@ -858,7 +858,7 @@ void LidarInertialOdometry::consider_keyframe(const Features& features, Odometry
   if (result.status & kStatusFewFeatures) return;
   const auto& o = config_.odometry;
   if (keyframes_.empty()) {
-    add_keyframe(features);
+    add_keyframe(features, similarity_cloud(features));
     result.status |= kStatusKeyframe;
     return;
   }
@@ -866,31 +866,39 @@ void LidarInertialOdometry::consider_keyframe(const Features& features, Odometry
   const double distance = (state_.position - last.position).norm();
   const double angle = so3::log(last.rotation.transpose() * state_.rotation).norm();
   if (distance < o.keyframe_distance_m && angle < o.keyframe_angle_deg * kDegToRad) return;
+  std::vector<Eigen::Vector3d> cloud = similarity_cloud(features);
   if (o.keyframe_gating == KeyframeGating::kHausdorff) {
-    std::vector<Eigen::Vector3d> cloud = transformed(features.planes, state_);
-    const auto edges = transformed(features.edges, state_);
-    cloud.insert(cloud.end(), edges.begin(), edges.end());
-    cloud = voxel_downsample(cloud, o.hausdorff_voxel_m);
     result.hausdorff_m = hausdorff_distance(cloud, keyframes_.back().similarity_cloud_world, 4.0 * o.hausdorff_threshold_m);
     if (result.hausdorff_m <= o.hausdorff_threshold_m) return;
   }
-  add_keyframe(features);
+  add_keyframe(features, std::move(cloud));
   result.status |= kStatusKeyframe;
 }
 
-void LidarInertialOdometry::add_keyframe(const Features& features) {
+std::vector<Eigen::Vector3d> LidarInertialOdometry::similarity_cloud(const Features& features) const {
+  std::vector<Eigen::Vector3d> cloud = transformed(features.planes, state_);
+  const auto edges = transformed(features.edges, state_);
+  cloud.insert(cloud.end(), edges.begin(), edges.end());
+  return voxel_downsample(cloud, config_.odometry.hausdorff_voxel_m);
+}
+
+void LidarInertialOdometry::add_keyframe(const Features& features, std::vector<Eigen::Vector3d> similarity_cloud_world) {
+  // Only the newest keyframe's similarity cloud is read (the next candidate's Hausdorff test, the
+  // backend's copy): the window's older ones let theirs go (with 200 keyframes, 8x the memory).
+  if (!keyframes_.empty()) {
+    keyframes_.back().similarity_cloud_world.clear();
+    keyframes_.back().similarity_cloud_world.shrink_to_fit();
+  }
   Keyframe kf;
   kf.id = next_keyframe_id_++;
   kf.state = state_;
   kf.planes_world = transformed(features.map_planes, state_);
   kf.edges_world = transformed(features.edges, state_);
-  kf.similarity_cloud_world = transformed(features.planes, state_);
-  kf.similarity_cloud_world.insert(kf.similarity_cloud_world.end(), kf.edges_world.begin(), kf.edges_world.end());
-  kf.similarity_cloud_world = voxel_downsample(kf.similarity_cloud_world, config_.odometry.hausdorff_voxel_m);
+  kf.similarity_cloud_world = std::move(similarity_cloud_world);
   plane_map_.add(kf.planes_world, kf.id);
   edge_map_.add(kf.edges_world, kf.id);
   if (update_params_.posts) {
-    kf.post_axes_world = post_axes(kf.edges_world, state_.rotation * *update_params_.edge_viewpoint_body + state_.position,
+    kf.post_axes_world = post_axes(kf.edges_world, state_.to_world(*update_params_.edge_viewpoint_body),
                                    -state_.gravity.normalized(), update_params_.posts->depth_m);
     post_axis_map_.add(kf.post_axes_world, kf.id);
   }

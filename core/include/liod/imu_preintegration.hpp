@@ -31,6 +31,9 @@ struct NavState {
   /// alignment, which takes the accelerometer's turn-on bias for tilt (0.3-0.6 deg a 0.05-0.1 m/s^2
   /// bias, more at a rolling start): the odometry estimates its direction (FAST-LIO2's S2 state).
   Eigen::Vector3d gravity{0.0, 0.0, -9.80665};
+
+  /// A point given in the body frame, in the world.
+  Eigen::Vector3d to_world(const Eigen::Vector3d& body_point) const { return rotation * body_point + position; }
 };
 
 class ImuPreintegration {

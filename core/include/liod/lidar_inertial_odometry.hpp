@@ -39,7 +39,7 @@ struct Keyframe {
   std::vector<Eigen::Vector3d> planes_world;
   std::vector<Eigen::Vector3d> edges_world;
   std::vector<Eigen::Vector3d> post_axes_world;  // edges_world as post axes (post_axes), with posts on
-  std::vector<Eigen::Vector3d> similarity_cloud_world;  // downsampled, for the Hausdorff test
+  std::vector<Eigen::Vector3d> similarity_cloud_world;  // downsampled, for the Hausdorff test; the newest keyframe's only
 };
 
 struct OdometryResult {
@@ -136,7 +136,8 @@ class LidarInertialOdometry {
   void deskew_features(const Scan& scan, const ScanFeatures& indices, const PoseTable& relative, Features& out) const;
   StateCovariance propagate_covariance(const ImuPreintegration& preintegration, const NavState& start) const;
   void consider_keyframe(const Features& features, OdometryResult& result);
-  void add_keyframe(const Features& features);
+  std::vector<Eigen::Vector3d> similarity_cloud(const Features& features) const;  // world frame, downsampled
+  void add_keyframe(const Features& features, std::vector<Eigen::Vector3d> similarity_cloud_world);
 
   Config config_;
   ExtrinsicsConfig extrinsics_;
