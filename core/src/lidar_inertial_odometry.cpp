@@ -246,6 +246,7 @@ LidarInertialOdometry::LidarInertialOdometry(const Config& config)
       extrinsics_(config.extrinsics),
       lidar_to_imu_{config.extrinsics.lidar_to_imu_rotation, config.extrinsics.lidar_to_imu_translation},
       extractor_(feature_params(config)),
+      held_bias_trim_(config.odometry.held_bias_trim_window_s, config.odometry.held_bias_trim_gain),
       plane_map_(config.odometry.map_voxel_m, config.odometry.map_points_per_voxel, config.odometry.map_min_point_spacing_m),
       edge_map_(config.odometry.map_voxel_m, config.odometry.map_points_per_voxel, config.odometry.map_min_point_spacing_m),
       post_axis_map_(edge_map_) {
@@ -819,6 +820,12 @@ void LidarInertialOdometry::process_scan(const Scan& scan, const ScanFeatures* e
     state_.time = t_end;
     covariance_ = update.covariance;
     result.velocity_correction_body = state_.rotation.transpose() * (state_.velocity - predicted.velocity);
+    if (!result.forward_hold) {
+      held_bias_trim_.reset();
+    } else if (const auto trim = held_bias_trim_.add_held_scan(
+                   config_.odometry.forward_axis.dot(result.velocity_correction_body), preintegration.duration())) {
+      state_.accel_bias += config_.odometry.forward_axis.normalized() * *trim;
+    }
     result.residuals = update.residuals;
     result.iterations = update.iterations;
     result.rms_residual_m = update.rms_residual_m;

@@ -55,6 +55,9 @@ TEST(ConfigLoader, OutOfRangeIsRejected) {
   EXPECT_NE(error_of("odometry:\n  hold_release_yaw_rate_deg_s: -1\n").find("odometry.hold_release_yaw_rate_deg_s"),
             std::string::npos);
   EXPECT_EQ(error_of("odometry:\n  hold_release_yaw_rate_deg_s: 0\n"), "");  // always held (the ablation)
+  // A gain above 1 would overshoot the measured bias error: the trim would oscillate.
+  EXPECT_NE(error_of("odometry:\n  held_bias_trim_gain: 1.5\n").find("odometry.held_bias_trim_gain"), std::string::npos);
+  EXPECT_EQ(error_of("odometry:\n  held_bias_trim_window_s: 0\n"), "");  // never trimmed
   // The local map's voxels hold at most 32 points: more is an error, not a silent cap.
   EXPECT_NE(error_of("odometry:\n  map_points_per_voxel: 33\n").find("[1, 32]"), std::string::npos);
   EXPECT_EQ(error_of("odometry:\n  map_points_per_voxel: 32\n"), "");

@@ -105,6 +105,10 @@ struct OdometryConfig {
   /// After a degenerate scan the forward accelerometer bias and gravity tilt are held, except while
   /// the vehicle turns faster than this (deg/s, IMU yaw rate): the turn separates the two. 0: always held.
   double hold_release_yaw_rate_deg_s = 5.0;
+  /// While the forward bias is held, the median rate of the LiDAR's forward velocity corrections
+  /// over this much held time (s; 0: never), times the gain, is taken off the bias (held_bias_trim.hpp).
+  double held_bias_trim_window_s = 20.0;
+  double held_bias_trim_gain = 0.5;
   bool degeneracy_projection = false;   // true: degenerate directions get no LiDAR update (else flagged only)
   double init_gyro_bias_std = 0.01;      // rad/s
   double init_accel_bias_std = 0.2;      // m/s^2

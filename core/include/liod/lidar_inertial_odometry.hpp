@@ -14,6 +14,7 @@
 #include "liod/body_rocking.hpp"
 #include "liod/config.hpp"
 #include "liod/curvature_features.hpp"
+#include "liod/held_bias_trim.hpp"
 #include "liod/imu_preintegration.hpp"
 #include "liod/imu_trajectory.hpp"
 #include "liod/iterated_update.hpp"
@@ -173,6 +174,7 @@ class LidarInertialOdometry {
   // The forward accelerometer bias is kept out of the next LiDAR update: at a rolling start, and
   // after a scan that left the along-track position unconstrained (process_scan explains why).
   bool hold_forward_accel_bias_ = false;
+  HeldBiasTrim held_bias_trim_;  // what the LiDAR's corrections say of the bias while it is held
   // Started from a standstill and not yet two keyframes on: walls, and the ground once the body
   // rolls, locate the scan across the track only (odometry.move_off_planes_across; process_scan
   // explains why).
