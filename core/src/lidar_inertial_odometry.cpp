@@ -820,11 +820,12 @@ void LidarInertialOdometry::process_scan(const Scan& scan, const ScanFeatures* e
     state_.time = t_end;
     covariance_ = update.covariance;
     result.velocity_correction_body = state_.rotation.transpose() * (state_.velocity - predicted.velocity);
+    const Eigen::Vector3d forward = config_.odometry.forward_axis.normalized();
     if (!result.forward_hold) {
       held_bias_trim_.reset();
-    } else if (const auto trim = held_bias_trim_.add_held_scan(
-                   config_.odometry.forward_axis.dot(result.velocity_correction_body), preintegration.duration())) {
-      state_.accel_bias += config_.odometry.forward_axis.normalized() * *trim;
+    } else if (const auto trim = held_bias_trim_.add_held_scan(forward.dot(result.velocity_correction_body),
+                                                               preintegration.duration())) {
+      state_.accel_bias += forward * *trim;
     }
     result.residuals = update.residuals;
     result.iterations = update.iterations;
