@@ -85,6 +85,45 @@ TEST(Cli, KittiFilesPairByIndexAndRpeFallsBackToFrames) {
   EXPECT_EQ(nlohmann::json::parse(t.out)["association"]["method"], "nearest");
 }
 
+TEST(Cli, TheSplitsVerticalIsZForTumAndMinusYForKitti) {
+  // The estimate 0.4 m above a straight track: up in a TUM (z-up) world, and in a KITTI camera
+  // world (y down) the same offset written as -0.4 m in y.
+  Poses track;
+  for (int i = 0; i < 40; ++i) track.push_back(test::pose(i, 0, 0));
+  Trajectory gt = test::stamped(track, 0.0, 0.1, "gt");
+  Trajectory est = gt;
+  for (auto& p : est.poses) p.translation().z() += 0.4;
+  const CliRun tum = invoke({"--gt", tum_file("cli_s_gt.txt", gt), "--est", tum_file("cli_s_est.txt", est), "--json",
+                             "--align", "none"});
+  ASSERT_EQ(tum.code, 0) << tum.err;
+  const auto j = nlohmann::json::parse(tum.out);
+  EXPECT_NEAR(j["ate_split"]["up_mean_m"].get<double>(), 0.4, 1e-9);
+  EXPECT_NEAR(j["ate_split"]["along_rmse_m"].get<double>(), 0.0, 1e-9);
+
+  Poses camera_track;  // KITTI: the camera looks along z
+  for (int i = 0; i < 40; ++i) camera_track.push_back(test::pose(0, 0, i));
+  Trajectory kgt = test::stamped(camera_track, 0.0, 0.1, "gt");
+  Trajectory kest = kgt;
+  for (auto& p : kest.poses) p.translation().y() -= 0.4;
+  std::ostringstream gs;
+  std::ostringstream es;
+  write_kitti(gs, kgt);
+  write_kitti(es, kest);
+  const std::string kg = test::write_temp("cli_s_kgt.txt", gs.str());
+  const std::string ke = test::write_temp("cli_s_kest.txt", es.str());
+  const CliRun kitti = invoke({"--gt", kg, "--est", ke, "--json", "--align", "none"});
+  ASSERT_EQ(kitti.code, 0) << kitti.err;
+  EXPECT_NEAR(nlohmann::json::parse(kitti.out)["ate_split"]["up_mean_m"].get<double>(), 0.4, 1e-9);
+  // Told that y is up, the same files read the offset as 0.4 m down.
+  const CliRun told = invoke({"--gt", kg, "--est", ke, "--json", "--align", "none", "--up", "y"});
+  ASSERT_EQ(told.code, 0) << told.err;
+  EXPECT_NEAR(nlohmann::json::parse(told.out)["ate_split"]["up_mean_m"].get<double>(), -0.4, 1e-9);
+  // The table prints the three rows.
+  const CliRun table = invoke({"--gt", kg, "--est", ke, "--align", "none"});
+  EXPECT_NE(table.out.find("ATE along [m]"), std::string::npos) << table.out;
+  EXPECT_NE(table.out.find("ATE up [m]"), std::string::npos) << table.out;
+}
+
 TEST(Cli, BadInputExitsNonZeroWithAClearMessage) {
   const Trajectory gt = test::stamped(test::wiggly(20), 0.0, 0.1, "gt");
   const std::string good = tum_file("cli_good.txt", gt);

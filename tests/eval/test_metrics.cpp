@@ -131,6 +131,54 @@ TEST(DistanceTravelled, NoneWithoutMotionAndABadStepIsAnError) {
   EXPECT_THROW(compute_distance_travelled(line(5), line(5), 0.0), InputError);
 }
 
+TEST(AteSplit, ErrorsLandOnTheirAxesRoundACurve) {
+  // A climbing arc of radius 20 m; the estimate runs 0.3 m ahead, 0.2 m left of it and 0.1 m low.
+  // The chord between a pose's neighbours on a circle is the tangent at the pose: the split is exact.
+  Poses gt;
+  Poses est;
+  for (int i = 0; i < 60; ++i) {
+    const double a = 0.05 * i;
+    const Eigen::Vector3d p(20.0 * std::cos(a), 20.0 * std::sin(a), 0.02 * i);
+    const Eigen::Vector3d travel(-std::sin(a), std::cos(a), 0.0);
+    const Eigen::Vector3d left = Eigen::Vector3d::UnitZ().cross(travel);
+    gt.push_back(test::pose(p.x(), p.y(), p.z()));
+    const Eigen::Vector3d q = p + 0.3 * travel + 0.2 * left - 0.1 * Eigen::Vector3d::UnitZ();
+    est.push_back(test::pose(q.x(), q.y(), q.z()));
+  }
+  const auto split = compute_ate_split(gt, est, Eigen::Vector3d::UnitZ());
+  ASSERT_TRUE(split);
+  // The end poses' one-sided chords turn 0.05 rad less than their tangents: 1 mm of mixing.
+  EXPECT_NEAR(split->along.median, 0.3, 1e-9);
+  EXPECT_NEAR(split->across.median, 0.2, 1e-9);
+  EXPECT_NEAR(split->along.mean, 0.3, 2e-3);
+  EXPECT_NEAR(split->across.mean, 0.2, 2e-3);
+  EXPECT_NEAR(split->vertical.mean, -0.1, 1e-12);
+  EXPECT_NEAR(split->vertical.rmse, 0.1, 1e-12);
+  // The three parts hold the whole error.
+  const double whole = std::sqrt(0.3 * 0.3 + 0.2 * 0.2 + 0.1 * 0.1);
+  const double parts = std::sqrt(std::pow(split->along.rmse, 2) + std::pow(split->across.rmse, 2) +
+                                 std::pow(split->vertical.rmse, 2));
+  EXPECT_NEAR(parts, whole, 1e-9);
+}
+
+TEST(AteSplit, AStandstillKeepsTheHeadingItStartsOrStopsWith) {
+  // Standing 5 poses, driving north 10 m, standing 5 poses; the estimate is 0.5 m east all along.
+  Poses gt;
+  for (int i = 0; i < 5; ++i) gt.push_back(test::pose(0, 0, 0));
+  for (int i = 1; i <= 10; ++i) gt.push_back(test::pose(0, i, 0));
+  for (int i = 0; i < 5; ++i) gt.push_back(test::pose(0, 10, 0));
+  Poses est = gt;
+  for (auto& p : est) p.translation().x() += 0.5;
+  const auto split = compute_ate_split(gt, est, Eigen::Vector3d::UnitZ());
+  ASSERT_TRUE(split);
+  EXPECT_NEAR(split->across.mean, -0.5, 1e-12);  // east of a northbound car is its right
+  EXPECT_NEAR(split->across.min, -0.5, 1e-12);
+  EXPECT_NEAR(split->along.rmse, 0.0, 1e-12);
+  // A ground truth that never moves across `up` has no direction of travel.
+  const Poses lift = {test::pose(0, 0, 0), test::pose(0, 0, 1), test::pose(0, 0, 2)};
+  EXPECT_FALSE(compute_ate_split(lift, lift, Eigen::Vector3d::UnitZ()));
+}
+
 TEST(Rpe, TooShortForDeltaIsNotANumber) {
   const Poses gt = line(5);
   EXPECT_FALSE(compute_rpe(seconds(5, 0.1), gt, gt, {1.0, DeltaUnit::Seconds}));

@@ -30,6 +30,7 @@ struct CliArgs {
   std::size_t kitti_step = 10;
   std::string plot;
   std::string plot_plane = "auto";
+  std::string up = "auto";
   bool json = false;
 };
 
@@ -44,6 +45,18 @@ Trajectory load(const std::string& path, Format format, const std::string& times
     t.stamps = std::move(stamps);
   }
   return t;
+}
+
+// The ground truth frame's vertical: liod's and TUM's worlds are z-up, KITTI's poses live in the
+// first left camera's frame, y down.
+Eigen::Vector3d up_axis(const std::string& text, Format format, const std::string& gt_path) {
+  if (text == "auto") {
+    const Format f = format == Format::Auto ? detect_format(gt_path) : format;
+    return f == Format::Kitti ? Eigen::Vector3d(0, -1, 0) : Eigen::Vector3d::UnitZ();
+  }
+  const double sign = text.front() == '-' ? -1.0 : 1.0;
+  const char axis = text.back();
+  return sign * Eigen::Vector3d::Unit(axis - 'x');
 }
 
 }  // namespace
@@ -77,6 +90,10 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   app.add_option("--plot", a.plot, "Write a PNG: top view of both trajectories, ATE against distance");
   app.add_option("--plot-plane", a.plot_plane, "auto|xy|xz|yz (auto: the plane the ground truth spreads in)")
       ->check(CLI::IsMember({"auto", "xy", "xz", "yz"}));
+  app.add_option("--up", a.up,
+                 "auto|x|y|z|-x|-y|-z: the ground truth's vertical, for the ATE's along/across/up split "
+                 "(auto: z, or -y for KITTI files)")
+      ->check(CLI::IsMember({"auto", "x", "y", "z", "-x", "-y", "-z"}));
   app.add_flag("--json", a.json, "Print one JSON object instead of the table");
 
   try {
@@ -100,6 +117,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
     o.rpe.delta = a.delta;
     o.rpe.unit = parse_delta_unit(a.delta_unit);
     o.kitti.step = a.kitti_step;
+    o.up = up_axis(a.up, format, a.gt);
     const bool stamped = gt.has_stamps() && est.has_stamps();
     std::string rpe_note;
     if (!stamped && unit_opt->count() == 0) {

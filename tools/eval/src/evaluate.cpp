@@ -31,6 +31,7 @@ EvalResult evaluate(const Trajectory& gt, const Trajectory& est, const EvalOptio
   }
 
   r.ate = compute_ate(a.gt, r.est_aligned);
+  r.ate_split = compute_ate_split(a.gt, r.est_aligned, options.up);
 
   RpeOptions rpe = options.rpe;
   if (!a.by_time && rpe.unit == DeltaUnit::Seconds) {

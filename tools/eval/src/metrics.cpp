@@ -51,6 +51,56 @@ AteResult compute_ate(const Poses& gt, const Poses& est) {
   return r;
 }
 
+std::optional<AteSplit> compute_ate_split(const Poses& gt, const Poses& est, const Eigen::Vector3d& up) {
+  const std::size_t n = gt.size();
+  // The horizontal motion between each pair's neighbours, where there is enough of it.
+  std::vector<std::optional<Eigen::Vector3d>> heading(n);
+  bool any = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t before = i > 0 ? i - 1 : 0;
+    const std::size_t after = std::min(i + 1, n - 1);
+    Eigen::Vector3d motion = gt[after].translation() - gt[before].translation();
+    motion -= motion.dot(up) * up;
+    if (motion.norm() >= kMinTravelForHeading) {
+      heading[i] = motion.normalized();
+      any = true;
+    }
+  }
+  if (!any) return std::nullopt;
+  // A standstill keeps the heading it stopped with; the first poses, before any motion, take the first one.
+  std::optional<Eigen::Vector3d> last;
+  for (auto& h : heading) {
+    if (h) {
+      last = h;
+    } else {
+      h = last;
+    }
+  }
+  std::optional<Eigen::Vector3d> next;
+  for (std::size_t i = n; i-- > 0;) {
+    if (heading[i]) {
+      next = heading[i];
+    } else {
+      heading[i] = next;
+    }
+  }
+  std::vector<double> along;
+  std::vector<double> across;
+  std::vector<double> vertical;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d error = est[i].translation() - gt[i].translation();
+    along.push_back(error.dot(*heading[i]));
+    across.push_back(error.dot(up.cross(*heading[i])));
+    vertical.push_back(error.dot(up));
+  }
+  AteSplit r;
+  r.up = up;
+  r.along = *summarize(along);
+  r.across = *summarize(across);
+  r.vertical = *summarize(vertical);
+  return r;
+}
+
 DeltaUnit parse_delta_unit(const std::string& text) {
   if (text == "m") return DeltaUnit::Metres;
   if (text == "s") return DeltaUnit::Seconds;

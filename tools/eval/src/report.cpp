@@ -80,6 +80,11 @@ std::string format_table(const EvalResult& r) {
   out << buf;
   stats_row(out, "ATE trans [m]", r.ate.translation, 4);
   stats_row(out, "ATE rot [deg]", r.ate.rotation, 4);
+  if (r.ate_split) {
+    stats_row(out, "ATE along [m]", r.ate_split->along, 4);
+    stats_row(out, "ATE across [m]", r.ate_split->across, 4);
+    stats_row(out, "ATE up [m]", r.ate_split->vertical, 4);
+  }
   if (r.rpe) {
     stats_row(out, "RPE trans [m]", r.rpe->translation, 4);
     stats_row(out, "RPE rot [deg]", r.rpe->rotation, 4);
@@ -104,6 +109,15 @@ std::string format_table(const EvalResult& r) {
   std::snprintf(buf, sizeof buf, "%-12s %9zu %12s %16s\n", "all", k.segments.size(),
                 opt(k.translational_pct, 4).c_str(), opt(k.rotational_deg_per_100m, 4).c_str());
   out << buf;
+
+  if (r.ate_split) {
+    const Eigen::Vector3d& u = r.ate_split->up;
+    std::snprintf(buf, sizeof buf,
+                  "\nATE along / across / up: signed, in the ground truth's direction of travel (across: "
+                  "+ to its left), up = (%g, %g, %g)\n",
+                  u.x(), u.y(), u.z());
+    out << buf;
+  }
 
   if (!r.notes.empty()) {
     out << '\n';
@@ -157,6 +171,16 @@ Json to_json(const EvalResult& r) {
   put_stats(ate, "rot_", "deg", r.ate.rotation);
   ate["count"] = r.ate.translation.count;
   j["ate"] = ate;
+  if (r.ate_split) {
+    json split;
+    split["up"] = {r.ate_split->up.x(), r.ate_split->up.y(), r.ate_split->up.z()};
+    put_stats(split, "along_", "m", r.ate_split->along);
+    put_stats(split, "across_", "m", r.ate_split->across);
+    put_stats(split, "up_", "m", r.ate_split->vertical);
+    j["ate_split"] = split;
+  } else {
+    j["ate_split"] = nullptr;
+  }
 
   if (r.rpe) {
     json rpe;

@@ -18,6 +18,8 @@ struct EvalOptions {
   AlignmentOptions alignment;
   RpeOptions rpe;
   KittiOptions kitti;
+  /// The ground truth frame's vertical, for the ATE's split (liod and TUM: z; KITTI's camera: -y).
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
 };
 
 struct EvalResult {
@@ -31,6 +33,8 @@ struct EvalResult {
   /// The estimate of each pair after alignment.
   Poses est_aligned;
   AteResult ate;
+  /// nullopt when the ground truth never moves horizontally (no direction of travel).
+  std::optional<AteSplit> ate_split;
   std::optional<RpeResult> rpe;
   KittiResult kitti;
   /// Ground-truth path length over the paired poses.

@@ -2,6 +2,7 @@
 // Absolute and relative trajectory errors, defined as evo defines them (Grupp, evo, metrics.py) so
 // numbers can be compared with papers that used evo.
 
+#include <Eigen/Core>
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -38,6 +39,24 @@ struct AteResult {
 
 /// gt and est pairwise corresponding and non-empty; est already aligned.
 AteResult compute_ate(const Poses& gt, const Poses& est);
+
+/// The ATE's translation error split in the ground truth's frame of travel, signed: along the
+/// direction of travel (the mean says whether the estimate runs ahead), across it (positive to the
+/// left of travel), and along `up`. A vehicle's error budget reads differently per axis: along the
+/// track it is the speed, across it the heading, vertically the map's pitch.
+struct AteSplit {
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  Stats along;
+  Stats across;
+  Stats vertical;
+};
+
+/// Direction of travel at pair i: the ground truth's horizontal (perpendicular to `up`) motion
+/// between its neighbours; where it stands still (under kMinTravelForHeading), the nearest
+/// direction before it, else after it. nullopt when the ground truth never moves horizontally.
+/// gt and est as for compute_ate; `up` a unit vector in the ground truth's frame.
+std::optional<AteSplit> compute_ate_split(const Poses& gt, const Poses& est, const Eigen::Vector3d& up);
+inline constexpr double kMinTravelForHeading = 0.05;  // m between a pair's two neighbours
 
 enum class DeltaUnit { Metres, Seconds, Frames };
 DeltaUnit parse_delta_unit(const std::string& text);  // m | s | frames; throws InputError
