@@ -262,6 +262,7 @@ Schema declare_schema(Config& c) {
   s.boolean("odometry.fit_uncertainty", &o.fit_uncertainty);
   s.boolean("odometry.post_edges", &o.post_edges);
   s.real("odometry.post_depth_m", &o.post_depth_m, 0.0, 1.0);
+  s.real("odometry.surface_end_extrapolation", &o.surface_end_extrapolation, 0.0, 1.0);
   s.boolean("odometry.move_off_planes_across", &o.move_off_planes_across);
   s.boolean("odometry.beam_calibration", &o.beam_calibration);
   s.real("odometry.keyframe_distance_m", &o.keyframe_distance_m, 0.0, 100.0);

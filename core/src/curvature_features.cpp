@@ -42,6 +42,22 @@ void ring_curvatures(const float* __restrict x, const float* __restrict y, const
 
 }  // namespace
 
+Eigen::Vector3f surface_end_shift(const Eigen::Vector3f& end, const Eigen::Vector3f& previous, double extrapolation) {
+  // Below these the step is the face-on spacing and its range noise (1.8 cm a return on the
+  // simulated Helios): moving a post's silhouette point by half of it adds noise, not accuracy
+  // (highway seeds 1-4, every end moved: 3.37 -> 5.02 m ATE).
+  constexpr float kMinGrazingStepRatio = 3.0F;  // grazing angle below ~20 deg
+  constexpr float kMinExtrapolatedStepM = 0.05F;
+  const float end_range = end.norm();
+  const float previous_range = previous.norm();
+  if (extrapolation <= 0.0 || end_range <= 0.0F || previous_range <= 0.0F) return Eigen::Vector3f::Zero();
+  const Eigen::Vector3f step = end - previous;
+  const float face_on_step = end_range * (end / end_range - previous / previous_range).norm();
+  const float length = step.norm();
+  if (length <= kMinExtrapolatedStepM || length <= kMinGrazingStepRatio * face_on_step) return Eigen::Vector3f::Zero();
+  return static_cast<float>(extrapolation) * step;
+}
+
 int curvature_neighbourhood_size(double range_m, CurvatureNeighbourhood mode) {
   if (mode == CurvatureNeighbourhood::kFixed) return 10;
   if (range_m <= 10.0) return 10;
@@ -54,6 +70,7 @@ void FeatureExtractor::extract(const Scan& scan, ScanFeatures& out) {
   out.edges.clear();
   out.planes.clear();
   out.plane_curvatures.clear();
+  out.edge_shifts.clear();
   const std::size_t beams = std::max<std::size_t>(scan.beam_count, 1);
   if (rings_.size() < beams) rings_.resize(beams);
   for (auto& ring : rings_) ring.clear();
@@ -167,6 +184,21 @@ void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uin
     begin = end;
   }
 
+  // An edge whose range jumps beyond it on one side ends the surface on the other: its shift
+  // towards that end, from the ring's previous return on the surface (no jump or missing return
+  // between the two).
+  auto surface_end_step = [&](int k) -> Eigen::Vector3f {
+    int previous = -1;
+    if (k + 1 < n && k > 0 && jumps[k] && range[k] < range[k + 1] && !jumps[k - 1]) previous = k - 1;
+    if (k > 0 && k + 1 < n && jumps[k - 1] && range[k] < range[k - 1] && !jumps[k]) previous = k + 1;
+    if (previous < 0 || gaps_before_[static_cast<std::size_t>(std::max(k, previous))] !=
+                            gaps_before_[static_cast<std::size_t>(std::min(k, previous))]) {
+      return Eigen::Vector3f::Zero();
+    }
+    return surface_end_shift(Eigen::Vector3f(x[k], y[k], z[k]), Eigen::Vector3f(x[previous], y[previous], z[previous]),
+                             params_.surface_end_extrapolation);
+  };
+
   // Per sector: the sharpest points become edges (spread out), the flattest ones planes.
   const int sectors = std::max(1, params_.sectors_per_ring);
   for (int s = 0; s < sectors; ++s) {
@@ -186,6 +218,7 @@ void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uin
       const std::uint32_t k = candidate.position;
       if (excluded_[k]) continue;
       out.edges.push_back(ring[k]);
+      out.edge_shifts.push_back(surface_end_step(static_cast<int>(k)));
       ++picked;
       // Neighbours of an edge would duplicate it.
       const int lo = std::max(0, static_cast<int>(k) - kMaxHalf);

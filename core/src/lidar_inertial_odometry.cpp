@@ -99,6 +99,7 @@ FeatureParams LidarInertialOdometry::feature_params(const Config& config) {
   p.plane_curvature = o.plane_curvature;
   p.sectors_per_ring = o.sectors_per_ring;
   p.max_edges_per_sector = o.max_edges_per_sector;
+  p.surface_end_extrapolation = o.surface_end_extrapolation;
   if ((o.crop_box_min_m.array() < o.crop_box_max_m.array()).all()) {
     CropBox box;
     box.sensor_to_body.linear() = extrinsics.lidar_to_imu_rotation.toRotationMatrix().cast<float>();
@@ -365,7 +366,12 @@ void LidarInertialOdometry::deskew_features(const Scan& scan, const ScanFeatures
   }
   std::vector<Eigen::Vector3d> edges;
   edges.reserve(indices.edges.size());
-  for (auto i : indices.edges) edges.push_back(deskewed(scan.points[i], lidar_point(scan.points[i])));
+  for (std::size_t e = 0; e < indices.edges.size(); ++e) {
+    const LidarPoint& p = scan.points[indices.edges[e]];
+    Eigen::Vector3d in_lidar = lidar_point(p);
+    if (e < indices.edge_shifts.size()) in_lidar += indices.edge_shifts[e].cast<double>();
+    edges.push_back(deskewed(p, in_lidar));
+  }
   // The map keeps planes denser than the queries so that each query finds a tight neighbourhood.
   out.map_planes = planes;
   // Each query is the flattest candidate of its voxel rather than the first (the extractor lists

@@ -148,4 +148,100 @@ TEST(CurvatureFeatures, ALowPostBeforeTheGroundIsAnEdge) {
   for (auto i : features.edges) EXPECT_GT(std::hypot(scan.points[i].x, scan.points[i].y), 7.5F);
 }
 
+// One horizontal beam inside a tunnel looking back at the portal: the right wall, 4.5 m to the
+// side, ends 20 m behind the sensor, and past its end the beam reaches the open road 60 m away.
+// The wall is met at 12.7 deg, so its returns lie 0.32 m apart and the last one short of the end.
+liod::Scan wall_end_at_grazing_scan(double azimuth_phase_deg) {
+  liod::Scan scan;
+  scan.beam_count = 1;
+  for (int i = 0; i < 400; ++i) {
+    const double az = (-100.0 - azimuth_phase_deg - 0.2 * i) * M_PI / 180.0;
+    const Eigen::Vector2d dir(std::cos(az), std::sin(az));
+    const double to_wall = -4.5 / dir.y();
+    const double reach = to_wall * dir.x() >= -20.0 ? to_wall : 60.0;
+    liod::LidarPoint p;
+    p.x = static_cast<float>(reach * dir.x());
+    p.y = static_cast<float>(reach * dir.y());
+    p.time = static_cast<float>(i * 55.56e-6);
+    scan.points.push_back(p);
+  }
+  return scan;
+}
+
+TEST(CurvatureFeatures, AWallsEndSeenAtGrazingIncidenceIsPlacedHalfAStepOn) {
+  liod::FeatureParams params;  // the defaults
+  params.sectors_per_ring = 1;
+  double raw_sum = 0.0;
+  double shifted_sum = 0.0;
+  double shifted_abs_sum = 0.0;
+  const int phases = 10;
+  for (int phase = 0; phase < phases; ++phase) {
+    const liod::Scan scan = wall_end_at_grazing_scan(0.02 * phase);
+    liod::FeatureExtractor extractor(params);
+    liod::ScanFeatures features;
+    extractor.extract(scan, features);
+    ASSERT_EQ(features.edge_shifts.size(), features.edges.size());
+    int at_end = 0;
+    for (std::size_t e = 0; e < features.edges.size(); ++e) {
+      const auto& p = scan.points[features.edges[e]];
+      if (std::abs(p.y + 4.5F) > 0.01F || p.x > -19.0F) continue;
+      ++at_end;
+      // How far short of the wall's end (towards the sensor), before and after the shift.
+      raw_sum += static_cast<double>(p.x) + 20.0;
+      const double shifted = static_cast<double>(p.x + features.edge_shifts[e].x()) + 20.0;
+      shifted_sum += shifted;
+      shifted_abs_sum += std::abs(shifted);
+      EXPECT_NEAR(p.y + features.edge_shifts[e].y(), -4.5F, 1e-3F) << "moved along the wall";
+    }
+    EXPECT_EQ(at_end, 1) << "phase " << phase;
+  }
+  // The last return is on average half a step (0.16 m) short of the end; moved on, on the end.
+  EXPECT_GT(raw_sum / phases, 0.12);
+  EXPECT_LT(std::abs(shifted_sum / phases), 0.03);
+  EXPECT_LT(shifted_abs_sum / phases, 0.5 * raw_sum / phases);
+
+  // Off: the edge stays where the last return was.
+  params.surface_end_extrapolation = 0.0;
+  liod::FeatureExtractor off(params);
+  liod::ScanFeatures features;
+  off.extract(wall_end_at_grazing_scan(0.0), features);
+  for (const auto& shift : features.edge_shifts) EXPECT_EQ(shift, Eigen::Vector3f::Zero());
+}
+
+TEST(CurvatureFeatures, APostSeenFaceOnKeepsItsEdgeWhereTheReturnWas) {
+  // Its returns are 2-3 cm apart, about the range noise: moving them would add noise, not accuracy.
+  const liod::Scan scan = post_before_the_ground_scan();
+  liod::FeatureParams params;
+  params.sectors_per_ring = 1;
+  liod::FeatureExtractor extractor(params);
+  liod::ScanFeatures features;
+  extractor.extract(scan, features);
+  int post_edges = 0;
+  for (std::size_t e = 0; e < features.edges.size(); ++e) {
+    if (std::hypot(scan.points[features.edges[e]].x, scan.points[features.edges[e]].y) >= 7.5F) continue;
+    ++post_edges;
+    EXPECT_EQ(features.edge_shifts[e], Eigen::Vector3f::Zero());
+  }
+  EXPECT_GE(post_edges, 1);
+}
+
+TEST(CurvatureFeatures, SurfaceEndShiftOnlyAtGrazingIncidence) {
+  // Face-on at 10 m, one 0.2 deg step: 3.5 cm, left alone.
+  const double step = 0.2 * M_PI / 180.0;
+  const Eigen::Vector3f face_on_prev(10.0F, 0.0F, 0.0F);
+  const Eigen::Vector3f face_on_end(10.0F, static_cast<float>(10.0 * std::tan(step)), 0.0F);
+  EXPECT_EQ(liod::surface_end_shift(face_on_end, face_on_prev, 0.5), Eigen::Vector3f::Zero());
+  // A wall along the x axis, 5.2 m to the side, met at 20 m and 15 deg; the ray turned one step
+  // further meets it 1 / sin(15 deg) = 3.9 times as far on as the same turn moves a face-on return.
+  const double grazing = 15.0 * M_PI / 180.0;
+  const Eigen::Vector3f wall_prev(static_cast<float>(20.0 * std::cos(grazing)), static_cast<float>(20.0 * std::sin(grazing)), 0.0F);
+  const double turned = grazing - step;
+  const double reach = static_cast<double>(wall_prev.y()) / std::sin(turned);
+  const Eigen::Vector3f wall_end(static_cast<float>(reach * std::cos(turned)), wall_prev.y(), 0.0F);
+  const Eigen::Vector3f shift = liod::surface_end_shift(wall_end, wall_prev, 0.5);
+  EXPECT_NEAR(shift.norm(), 0.5F * (wall_end - wall_prev).norm(), 1e-5F);
+  EXPECT_NEAR(shift.y(), 0.0F, 1e-5F) << "along the wall";
+  EXPECT_EQ(liod::surface_end_shift(wall_end, wall_prev, 0.0), Eigen::Vector3f::Zero());
+}
+
 }  // namespace

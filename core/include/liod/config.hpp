@@ -92,6 +92,7 @@ struct OdometryConfig {
   bool beam_calibration = true;  // learn each beam's elevation offset from its ground residuals (beam_calibration.hpp)
   bool post_edges = true;  // along_ray only: edges on posts (map points one above the other) match the post's axis
   double post_depth_m = 0.08;  // post_edges: an edge point's post axis lies this far behind it along the ray
+  double surface_end_extrapolation = 0.5;  // an edge ending a surface seen at grazing incidence: moved on this share of a step
   bool move_off_planes_across = true;  // after a standstill start, until the 2nd keyframe: walls (and once rolling, the ground) locate across the track only
   double keyframe_distance_m = 1.0;
   double keyframe_angle_deg = 10.0;

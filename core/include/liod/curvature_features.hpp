@@ -46,6 +46,9 @@ struct FeatureParams {
   double plane_curvature = 0.05;
   int sectors_per_ring = 8;
   int max_edges_per_sector = 6;
+  /// An edge point that ends a surface seen at grazing incidence (the ring's range jumps beyond
+  /// it) is moved on by this share of its step from the surface's previous return; 0: never.
+  double surface_end_extrapolation = 0.5;
   std::optional<CropBox> self_crop;  // the vehicle's own body
 };
 
@@ -56,7 +59,21 @@ struct ScanFeatures {
   std::vector<std::uint32_t> edges;   // indices into Scan::points
   std::vector<std::uint32_t> planes;
   std::vector<float> plane_curvatures;  // each plane candidate's curvature, in the order of planes
+  /// Per edge, in the order of edges (LiDAR frame): where its surface is expected to end, from the
+  /// point; zero unless the edge ends a surface seen at grazing incidence (surface_end_shift).
+  std::vector<Eigen::Vector3f> edge_shifts;
 };
+
+/// The last return on a surface before the ring's range jumps beyond it lies short of the
+/// surface's end by up to one step between returns, at an unknown phase: on average half a step.
+/// Face-on that step is a few centimetres, about the range noise; along a wall seen at grazing
+/// incidence it is range x azimuth step / sin(grazing angle), 0.2-0.4 m for a tunnel's portal seen
+/// from 15-25 m inside, and matched to the map's corner (seen face-on on the approach) every such
+/// point pulled the scan towards the portal. Returns extrapolation x (end - previous) when the
+/// step is over kMinGrazingStepRatio x what the same turn of the ray makes face-on and over
+/// kMinExtrapolatedStepM, else zero. end: the edge point; previous: the ring's return before it on
+/// the same surface.
+Eigen::Vector3f surface_end_shift(const Eigen::Vector3f& end, const Eigen::Vector3f& previous, double extrapolation);
 
 /// Reuses its buffers from scan to scan, so steady-state extraction does not allocate.
 class FeatureExtractor {
