@@ -70,7 +70,7 @@ struct ScanFeatures {
 /// incidence it is range x azimuth step / sin(grazing angle), 0.2-0.4 m for a tunnel's portal seen
 /// from 15-25 m inside, and matched to the map's corner (seen face-on on the approach) every such
 /// point pulled the scan towards the portal. Returns extrapolation x (end - previous) when the
-/// step is over kMinGrazingStepRatio x what the same turn of the ray makes face-on and over
+/// step is over kMinGrazingStepRatio (5) x what the same turn of the ray makes face-on and over
 /// kMinExtrapolatedStepM, else zero. end: the edge point; previous: the ring's return before it on
 /// the same surface.
 Eigen::Vector3f surface_end_shift(const Eigen::Vector3f& end, const Eigen::Vector3f& previous, double extrapolation);
