@@ -48,7 +48,7 @@ Eigen::Vector3f surface_end_shift(const Eigen::Vector3f& end, const Eigen::Vecto
   // (highway seeds 1-4, every end moved: 3.37 -> 5.02 m ATE). At 3x (grazing below 20 deg) the
   // rings' crossings of a guard rail's top and bottom, ends fixed in the sensor's frame, moved too,
   // and a rolling start beside rails came out 3.7 % short; at 5x (below 11.5 deg; the extractor
-  // drops returns beyond 10 deg as parallel to the beam) it is 0.5 %, and the portals' corners,
+  // drops surface ends met under 10 deg as parallel to the beam) it is 0.5 %, and the portals' corners,
   // the steepest steps, are still moved (docs/odometry.md, 2026-12-05, third session).
   constexpr float kMinGrazingStepRatio = 5.0F;
   constexpr float kMinExtrapolatedStepM = 0.05F;
