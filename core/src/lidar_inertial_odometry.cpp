@@ -368,9 +368,7 @@ void LidarInertialOdometry::deskew_features(const Scan& scan, const ScanFeatures
   edges.reserve(indices.edges.size());
   for (std::size_t e = 0; e < indices.edges.size(); ++e) {
     const LidarPoint& p = scan.points[indices.edges[e]];
-    Eigen::Vector3d in_lidar = lidar_point(p);
-    if (e < indices.edge_shifts.size()) in_lidar += indices.edge_shifts[e].cast<double>();
-    edges.push_back(deskewed(p, in_lidar));
+    edges.push_back(deskewed(p, lidar_point(p) + indices.edge_shifts[e].cast<double>()));
   }
   // The map keeps planes denser than the queries so that each query finds a tight neighbourhood.
   out.map_planes = planes;

@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "liod/curvature_features.hpp"
 
@@ -226,28 +227,31 @@ TEST(CurvatureFeatures, APostSeenFaceOnKeepsItsEdgeWhereTheReturnWas) {
   EXPECT_GE(post_edges, 1);
 }
 
+// Two returns of one ring on a wall along the x axis: the first met at 20 m and grazing_deg, the
+// second where the ray turned one step (0.2 deg) further meets the wall.
+std::pair<Eigen::Vector3f, Eigen::Vector3f> returns_on_a_wall(double grazing_deg, double step) {
+  const double grazing = grazing_deg * M_PI / 180.0;
+  const Eigen::Vector3f previous(static_cast<float>(20.0 * std::cos(grazing)), static_cast<float>(20.0 * std::sin(grazing)), 0.0F);
+  const double reach = static_cast<double>(previous.y()) / std::sin(grazing - step);
+  const Eigen::Vector3f end(static_cast<float>(reach * std::cos(grazing - step)), previous.y(), 0.0F);
+  return {previous, end};
+}
+
 TEST(CurvatureFeatures, SurfaceEndShiftOnlyAtGrazingIncidence) {
   // Face-on at 10 m, one 0.2 deg step: 3.5 cm, left alone.
   const double step = 0.2 * M_PI / 180.0;
   const Eigen::Vector3f face_on_prev(10.0F, 0.0F, 0.0F);
   const Eigen::Vector3f face_on_end(10.0F, static_cast<float>(10.0 * std::tan(step)), 0.0F);
   EXPECT_EQ(liod::surface_end_shift(face_on_end, face_on_prev, 0.5), Eigen::Vector3f::Zero());
-  // A wall along the x axis met at 20 m and 10.5 deg; the ray turned one step further meets it
-  // 1 / sin(10.5 deg) = 5.5 times as far on as the same turn moves a face-on return.
-  const double grazing = 10.5 * M_PI / 180.0;
-  const Eigen::Vector3f wall_prev(static_cast<float>(20.0 * std::cos(grazing)), static_cast<float>(20.0 * std::sin(grazing)), 0.0F);
-  const double turned = grazing - step;
-  const double reach = static_cast<double>(wall_prev.y()) / std::sin(turned);
-  const Eigen::Vector3f wall_end(static_cast<float>(reach * std::cos(turned)), wall_prev.y(), 0.0F);
+  // A wall met at 10.5 deg: the ray turned one step further meets it 1 / sin(10.5 deg) = 5.5 times
+  // as far on as the same turn moves a face-on return.
+  const auto [wall_prev, wall_end] = returns_on_a_wall(10.5, step);
   const Eigen::Vector3f shift = liod::surface_end_shift(wall_end, wall_prev, 0.5);
   EXPECT_NEAR(shift.norm(), 0.5F * (wall_end - wall_prev).norm(), 1e-5F);
   EXPECT_NEAR(shift.y(), 0.0F, 1e-5F) << "along the wall";
   EXPECT_EQ(liod::surface_end_shift(wall_end, wall_prev, 0.0), Eigen::Vector3f::Zero());
   // At 15 deg (3.9 times) a guard rail's band crossing looks the same: left alone.
-  const double rail = 15.0 * M_PI / 180.0;
-  const Eigen::Vector3f rail_prev(static_cast<float>(20.0 * std::cos(rail)), static_cast<float>(20.0 * std::sin(rail)), 0.0F);
-  const double rail_reach = static_cast<double>(rail_prev.y()) / std::sin(rail - step);
-  const Eigen::Vector3f rail_end(static_cast<float>(rail_reach * std::cos(rail - step)), rail_prev.y(), 0.0F);
+  const auto [rail_prev, rail_end] = returns_on_a_wall(15.0, step);
   EXPECT_EQ(liod::surface_end_shift(rail_end, rail_prev, 0.5), Eigen::Vector3f::Zero());
 }
 
