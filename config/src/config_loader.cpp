@@ -280,7 +280,6 @@ Schema declare_schema(Config& c) {
   s.real("odometry.init_accel_bias_std", &o.init_accel_bias_std, 1e-6, 10.0);
   s.real("odometry.init_velocity_std", &o.init_velocity_std, 1e-3, 100.0);
   s.real("odometry.init_tilt_std_deg", &o.init_tilt_std_deg, 0.01, 45.0);
-  s.real("odometry.rolling_start_accel_std", &o.rolling_start_accel_std, 0.0, 10.0);
 
   auto& b = c.backend;
   s.boolean("backend.enabled", &b.enabled);

@@ -7,22 +7,6 @@
 
 namespace liod {
 
-void correlate_bias_and_tilt(const NavState& x, const double bias_std, const double accel_std, StateCovariance& p) {
-  const double g2 = x.gravity.squaredNorm();
-  // d g / d dg = -[g]x B: its columns B_j x g, orthogonal, each of length |g|.
-  const Eigen::Matrix<double, 3, 2> basis = gravity_tangent_basis(x.gravity);
-  Eigen::Matrix<double, 3, 2> d_gravity;
-  for (int j = 0; j < 2; ++j) d_gravity.col(j) = basis.col(j).cross(x.gravity);
-  // R (f - b) + g (+) dg = a  =>  dg = G^T (R b + a) / |g|^2 (the least-squares solve; G^T G = |g|^2 I).
-  const Eigen::Matrix<double, 2, 3> tilt_from_bias = d_gravity.transpose() * x.rotation / g2;
-  const double bias_var = bias_std * bias_std;
-  p.block<3, 3>(12, 12) = Eigen::Matrix3d::Identity() * bias_var;
-  p.block<2, 3>(kGravityIndex, 12) = bias_var * tilt_from_bias;
-  p.block<3, 2>(12, kGravityIndex) = bias_var * tilt_from_bias.transpose();
-  p.block<2, 2>(kGravityIndex, kGravityIndex) =
-      bias_var * tilt_from_bias * tilt_from_bias.transpose() + Eigen::Matrix2d::Identity() * accel_std * accel_std / g2;
-}
-
 Eigen::Matrix3d rotation_from_up(const Eigen::Vector3d& up_in_body) {
   const Eigen::Vector3d up = up_in_body.normalized();
   // Roll and pitch that level the body; yaw is unobservable and set to zero.

@@ -720,14 +720,6 @@ void LidarInertialOdometry::start_at_speed(double speed) {
   const double speed_std = 0.5;
   covariance_.block<3, 3>(6, 6) = Eigen::Matrix3d::Identity() * speed_std * speed_std;
   hold_forward_accel_bias_ = std::abs(speed) > 2.0 * speed_std;  // moving for sure
-  // Moving, the speed is still loose and then the hold keeps the forward bias and tilt out of the
-  // LiDAR's updates until a turn, so no scan tells their sum as a standstill's do: the alignment's
-  // knowledge of it is the prior (gravity_alignment.hpp). At rest the correlation made tunnel
-  // seeds 1 / 2 3.47 / 3.27 m against 1.13 / 2.39 (docs/odometry.md, 2026-12-05, fourth session).
-  const auto& o = config_.odometry;
-  if (hold_forward_accel_bias_ && o.rolling_start_accel_std > 0.0) {
-    correlate_bias_and_tilt(state_, o.init_accel_bias_std, o.rolling_start_accel_std, covariance_);
-  }
   covariance_.block<3, 3>(6, 0).setZero();
   covariance_.block<3, 3>(0, 6).setZero();
 }

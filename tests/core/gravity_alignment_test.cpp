@@ -1,9 +1,6 @@
 // Start-up alignment: tilt from the accelerometer, gyro bias from the mean rate at rest.
 #include <gtest/gtest.h>
 
-#include <Eigen/Eigenvalues>
-#include <Eigen/Geometry>
-
 #include <cmath>
 #include <deque>
 
@@ -54,45 +51,4 @@ TEST(GravityAlignment, ARockingBodysMeanRateIsItsBiasOnlyOverSeveralSwings) {
   EXPECT_GT((*peak - bias).norm(), 0.01);
   EXPECT_LT((*rest - bias).norm(), 0.002);
   EXPECT_FALSE(liod::mean_angular_rate(samples, 3.0, 4.0).has_value());
-}
-
-// The alignment's correlation, through the filter's own state perturbation (boxplus): a bias with
-// the tilt the alignment would have taken for it leaves the horizontal specific force it predicts
-// unchanged, so that sum's spread is the vehicle's acceleration alone.
-TEST(GravityAlignment, TheBiasAndTheTiltItWouldHaveCausedCancelInThePredictedAcceleration) {
-  liod::NavState aligned;
-  aligned.rotation = (Eigen::AngleAxisd(0.03, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(-0.02, Eigen::Vector3d::UnitX()))
-                         .toRotationMatrix();
-  aligned.gravity = Eigen::Vector3d(0.0, 0.0, -kGravity);
-  const double bias_std = 0.2;
-  const double accel_std = 0.15;
-  liod::StateCovariance p = liod::StateCovariance::Identity() * 1e-4;
-  liod::correlate_bias_and_tilt(aligned, bias_std, accel_std, p);
-  // The body at rest as aligned: R f + g = 0.
-  const Eigen::Vector3d f = -aligned.rotation.transpose() * aligned.gravity;
-  // Horizontal acceleration the filter predicts with the state perturbed by delta.
-  auto horizontal_acceleration = [&](const liod::StateVector& delta) {
-    const liod::NavState x = liod::boxplus(aligned, delta);
-    const Eigen::Vector3d a = x.rotation * (f - x.accel_bias) + x.gravity;
-    return Eigen::Vector2d(a.x(), a.y());
-  };
-  // Linear map from (bias, tilt) to that acceleration, by central differences.
-  Eigen::Matrix<double, 2, liod::kStateDim> jacobian = Eigen::Matrix<double, 2, liod::kStateDim>::Zero();
-  for (int i = 12; i < liod::kStateDim; ++i) {
-    liod::StateVector step = liod::StateVector::Zero();
-    step(i) = 1e-6;
-    jacobian.col(i) = (horizontal_acceleration(step) - horizontal_acceleration(-step)) / 2e-6;
-  }
-  const Eigen::Matrix2d spread = jacobian * p * jacobian.transpose();
-  EXPECT_NEAR(spread(0, 0), accel_std * accel_std, 1e-6);
-  EXPECT_NEAR(spread(1, 1), accel_std * accel_std, 1e-6);
-  EXPECT_NEAR(spread(0, 1), 0.0, 1e-6);
-  // Independent priors of the same sizes would have left the sum as loose as bias and tilt together.
-  liod::StateCovariance independent = p;
-  independent.block<3, 2>(12, liod::kGravityIndex).setZero();
-  independent.block<2, 3>(liod::kGravityIndex, 12).setZero();
-  EXPECT_GT((jacobian * independent * jacobian.transpose())(0, 0), 2.0 * accel_std * accel_std);
-  // The bias keeps its prior, and the whole is a covariance.
-  EXPECT_NEAR(p(12, 12), bias_std * bias_std, 1e-12);
-  EXPECT_GT(Eigen::SelfAdjointEigenSolver<liod::StateCovariance>(p).eigenvalues().minCoeff(), 0.0);
 }

@@ -115,9 +115,6 @@ struct OdometryConfig {
   double init_accel_bias_std = 0.2;      // m/s^2
   double init_velocity_std = 20.0;       // m/s: unknown speed at a rolling start
   double init_tilt_std_deg = 5.0;
-  /// A rolling start's alignment took the vehicle's acceleration (this std, m/s^2) for tilt: the
-  /// bias and the gravity tilt start correlated by it (gravity_alignment.hpp). 0: independent priors.
-  double rolling_start_accel_std = 0.15;
 };
 
 enum class LoopDistance { k2D, k3D };

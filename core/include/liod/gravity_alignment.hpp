@@ -8,7 +8,6 @@
 #include <deque>
 #include <optional>
 
-#include "liod/error_state.hpp"
 #include "liod/types.hpp"
 
 namespace liod {
@@ -26,16 +25,6 @@ std::optional<GravityAlignment> align_gravity(const std::deque<ImuSample>& sampl
 /// The mean gyro reading over the samples in [from, to]; nullopt with fewer than min_samples.
 std::optional<Eigen::Vector3d> mean_angular_rate(const std::deque<ImuSample>& samples, double from, double to,
                                                  std::size_t min_samples = 10);
-
-/// The alignment took the mean specific force f for -g: R (f - b) + g = a holds with the vehicle's
-/// acceleration a over the alignment's window, so the accelerometer bias's horizontal part and
-/// the gravity tilt are one unknown seen twice (bias = R^T G dg - R^T a, G = d g / d dg). Writes
-/// that correlation into p's bias and gravity blocks: the bias keeps its prior bias_std, the tilt
-/// is the bias's image plus the acceleration's, accel_std (m/s^2) on each horizontal axis. x is
-/// the aligned state (its rotation and gravity). On a rolling start the first scans cannot fix
-/// the split (the speed is still being searched and then the forward pair is held); at rest they
-/// can.
-void correlate_bias_and_tilt(const NavState& x, double bias_std, double accel_std, StateCovariance& p);
 
 /// The rotation with zero yaw that maps the body's measured "up" (specific force direction) to +z.
 Eigen::Matrix3d rotation_from_up(const Eigen::Vector3d& up_in_body);
