@@ -250,9 +250,9 @@ TEST(CurvatureFeatures, SurfaceEndShiftOnlyAtGrazingIncidence) {
   EXPECT_NEAR(shift.norm(), 0.5F * (wall_end - wall_prev).norm(), 1e-5F);
   EXPECT_NEAR(shift.y(), 0.0F, 1e-5F) << "along the wall";
   EXPECT_EQ(liod::surface_end_shift(wall_end, wall_prev, 0.0), Eigen::Vector3f::Zero());
-  // At 15 deg (3.9 times) a guard rail's band crossing looks the same: left alone.
-  const auto [rail_prev, rail_end] = returns_on_a_wall(15.0, step);
-  EXPECT_EQ(liod::surface_end_shift(rail_end, rail_prev, 0.5), Eigen::Vector3f::Zero());
+  // At 15 deg (3.9 times), below the gate: left alone.
+  const auto [shallow_prev, shallow_end] = returns_on_a_wall(15.0, step);
+  EXPECT_EQ(liod::surface_end_shift(shallow_end, shallow_prev, 0.5), Eigen::Vector3f::Zero());
 }
 
 }  // namespace
