@@ -386,17 +386,21 @@ void LidarInertialOdometry::deskew_features(const Scan& scan, const ScanFeatures
 }
 
 // Each plane point of the scan against the map at the updated pose: its residual and how it
-// would move with its beam's elevation. Ground only: there an elevation offset moves a point
-// across the surface (along the ray on a wall it hardly does) and the map is densest.
-void LidarInertialOdometry::learn_beam_elevations(const Features& features) {
+// would move with its beam's elevation or range. Elevations from the far ground only: there an
+// elevation offset moves a point across the surface (along the ray on a wall it hardly does) and
+// the map is densest. Ranges, when learned, from every other plane point.
+void LidarInertialOdometry::learn_beam_calibration(const Features& features) {
   const Eigen::Matrix3d world_from_lidar = state_.rotation * lidar_to_imu_.rotation.toRotationMatrix();
   const Eigen::Vector3d up = -state_.gravity.normalized();
   const double noise = config_.odometry.lidar_noise_m;
   const double max_elevation_slope = std::tan(kBeamMaxElevationRad);
-  // The ground points beyond kBeamMinRangeM, every kBeamPointStride-th of each beam.
+  const bool learn_ranges = beam_calibration_.learns_ranges();
+  // The candidates (the far ground below the horizon, or every plane point when ranges are learned),
+  // every kBeamPointStride-th of each beam.
   struct Picked {
     std::size_t index;
     double horizontal;  // its range across the LiDAR's axis
+    bool far_below_horizon;
   };
   std::vector<Picked> picked;
   std::vector<Eigen::Vector3d> world;
@@ -404,9 +408,11 @@ void LidarInertialOdometry::learn_beam_elevations(const Features& features) {
   for (std::size_t i = 0; i < features.map_planes.size(); ++i) {
     const RingPoint& source = features.map_plane_sources[i];
     const double horizontal = std::hypot(source.lidar.x(), source.lidar.y());
-    if (horizontal < kBeamMinRangeM || source.lidar.z() > horizontal * max_elevation_slope) continue;
-    if (source.ring >= seen.size() || seen[source.ring]++ % kBeamPointStride != 0) continue;  // add() would drop it
-    picked.push_back({i, horizontal});
+    const bool far_below_horizon =
+        horizontal >= kBeamMinRangeM && source.lidar.z() <= horizontal * max_elevation_slope;
+    if (!far_below_horizon && !learn_ranges) continue;
+    if (source.ring >= seen.size() || seen[source.ring]++ % kBeamPointStride != 0) continue;  // add_* would drop it
+    picked.push_back({i, horizontal, far_below_horizon});
     world.push_back(state_.to_world(features.map_planes[i]));
   }
   // Their planes searched voxel by voxel (as the registration's), added in sweep order.
@@ -417,14 +423,20 @@ void LidarInertialOdometry::learn_beam_elevations(const Features& features) {
   }
   for (std::size_t k = 0; k < picked.size(); ++k) {
     const auto& plane = planes[k];
-    if (!plane || std::abs(plane->normal.dot(up)) < kGroundNormalCos) continue;
+    if (!plane) continue;
     const double residual = plane->evaluate(world[k]);
     if (std::abs(residual) > kBeamResidualGateM) continue;
     const RingPoint& source = features.map_plane_sources[picked[k].index];
-    const double elevation = std::atan2(source.lidar.z(), picked[k].horizontal);
-    const double jacobian =
-        plane->normal.dot(world_from_lidar * BeamElevationCalibration::elevation_derivative(source.lidar));
-    beam_calibration_.add(source.ring, elevation, jacobian, residual, noise * noise * plane->variance_scale);
+    const double variance = noise * noise * plane->variance_scale;
+    if (picked[k].far_below_horizon && std::abs(plane->normal.dot(up)) >= kGroundNormalCos) {
+      const double elevation = std::atan2(source.lidar.z(), picked[k].horizontal);
+      const double jacobian =
+          plane->normal.dot(world_from_lidar * BeamCalibration::elevation_derivative(source.lidar));
+      beam_calibration_.add_elevation(source.ring, elevation, jacobian, residual, variance);
+    } else {
+      beam_calibration_.add_range(source.ring, plane->normal.dot(world_from_lidar * source.lidar.normalized()), residual,
+                                  variance);
+    }
   }
   beam_calibration_.finish_scan();
 }
@@ -455,7 +467,9 @@ void LidarInertialOdometry::initialize(const Scan& scan, OdometryResult& result)
   const double gravity_tilt = o.init_accel_bias_std / config_.imu.gravity_m_s2;
   covariance_.diagonal().segment<2>(kGravityIndex).setConstant(gravity_tilt * gravity_tilt);
   if (config_.odometry.beam_calibration && beam_calibration_.beams() != scan.beam_count) {
-    beam_calibration_ = BeamElevationCalibration(scan.beam_count);
+    BeamCalibrationParams params;
+    params.learn_ranges = config_.odometry.beam_range_calibration;
+    beam_calibration_ = BeamCalibration(scan.beam_count, params);
   }
   initialized_ = true;
   result.status |= kStatusInitializing;
@@ -854,7 +868,7 @@ void LidarInertialOdometry::process_scan(const Scan& scan, const ScanFeatures* e
     edge_map_ = plane_map_;
     post_axis_map_ = plane_map_;
   }
-  if (config_.odometry.beam_calibration && map_trusted_ && !plane_map_.empty()) learn_beam_elevations(features);
+  if (config_.odometry.beam_calibration && map_trusted_ && !plane_map_.empty()) learn_beam_calibration(features);
   consider_keyframe(features, result);
   if (keyframes_.size() >= 2) moving_off_ = false;
   result.map_ms = elapsed_ms(t);

@@ -90,6 +90,7 @@ struct OdometryConfig {
   bool fit_uncertainty = true;           // a residual's variance includes its fitted plane's / line's uncertainty
   EdgeResidual edge_residual = EdgeResidual::kAlongRay;
   bool beam_calibration = true;  // learn each beam's elevation offset from its ground residuals (beam_calibration.hpp)
+  bool beam_range_calibration = false;  // with beam_calibration: each beam's range offset too (beam_calibration.hpp)
   bool post_edges = true;  // along_ray only: edges on posts (map points one above the other) match the post's axis
   double post_depth_m = 0.08;  // post_edges: an edge point's post axis lies this far behind it along the ray
   double surface_end_extrapolation = 0.5;  // an edge ending a surface seen at grazing incidence: moved on this share of a step

@@ -147,8 +147,8 @@ class LidarInertialOdometry {
   UpdateParams update_params_;
   FeatureExtractor extractor_;
   ScanFeatures scan_features_;
-  BeamElevationCalibration beam_calibration_;
-  void learn_beam_elevations(const Features& features);
+  BeamCalibration beam_calibration_;
+  void learn_beam_calibration(const Features& features);
 
   std::deque<ImuSample> imu_;
   std::size_t dropped_imu_ = 0;
