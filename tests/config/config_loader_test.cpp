@@ -30,6 +30,7 @@ TEST(ConfigLoader, ShippedConfigLoadsAndMatchesDefaults) {
   EXPECT_DOUBLE_EQ(config.odometry.hausdorff_threshold_m, defaults.odometry.hausdorff_threshold_m);
   EXPECT_EQ(config.odometry.window_keyframes, 200);
   EXPECT_EQ(config.odometry.deskew, liod::DeskewMode::kImu);
+  EXPECT_DOUBLE_EQ(config.odometry.move_off_distance_m, defaults.odometry.move_off_distance_m);
 }
 
 TEST(ConfigLoader, UnknownKeyNamesFileKeyAndValue) {

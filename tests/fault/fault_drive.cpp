@@ -116,6 +116,10 @@ const FaultDrive* move_off_drive() {
   return simulated_drive("move-off-drive", "--route highway --seed 4 --duration 8 --max-speed 15 --static-start");
 }
 
+const FaultDrive* tunnel_move_off_drive() {
+  return simulated_drive("tunnel-move-off-drive", "--route tunnel --seed 9 --duration 25 --max-speed 15");
+}
+
 const FaultDrive* rail_faces_drive() {
   return simulated_drive("rail-faces-drive", "--route highway --seed 131 --duration 8 --max-speed 13");
 }

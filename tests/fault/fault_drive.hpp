@@ -41,6 +41,9 @@ const FaultDrive* rest_drive();
 const FaultDrive* tunnel_rest_drive();
 /// Highway seed 4, 8 s up to 15 m/s, 3 s at rest: moving off between slanted barrier faces.
 const FaultDrive* move_off_drive();
+/// `liod-sim --route tunnel --seed 9 --duration 25 --max-speed 15`: 3 s at rest inside a tunnel of
+/// constant section, then off at 1.6 m/s^2 to 15 m/s.
+const FaultDrive* tunnel_move_off_drive();
 
 /// `liod-sim --route highway --seed 108 --duration 6 --max-speed 15`: a rolling start at 15 m/s
 /// whose first two scans alone overlap best at 2-3 m/s (speed_search).
