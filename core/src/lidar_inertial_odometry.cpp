@@ -875,8 +875,8 @@ void LidarInertialOdometry::process_scan(const Scan& scan, const ScanFeatures* e
   // arc (rings lie 1-5 m apart on the road at 10-20 m): their planes pull the scans back towards
   // where the car stood. In a tunnel of constant section nothing else locates the car along it,
   // and that pull stopped a car pulling away at 1.6 m/s^2 within 15 s (tunnel seed 9: 4638 m ATE
-  // ended at the 2nd keyframe, 1.14 m at 10 m; docs/odometry.md "Moving off in a tunnel").
-  if (keyframes_.size() >= 2 &&
+  // ended at the 2nd keyframe, 1.14 m at 10 m; docs/odometry.md "Ten tunnel seeds").
+  if (moving_off_ && keyframes_.size() >= 2 &&
       (state_.position - standstill_position_).norm() >= config_.odometry.move_off_distance_m) {
     moving_off_ = false;
   }

@@ -175,9 +175,9 @@ class LidarInertialOdometry {
   // after a scan that left the along-track position unconstrained (process_scan explains why).
   bool hold_forward_accel_bias_ = false;
   HeldBiasTrim held_bias_trim_;  // what the LiDAR's corrections say of the bias while it is held
-  // Started from a standstill and not yet odometry.move_off_distance_m from it: walls, and the ground
-  // once the body rolls, locate the scan across the track only (odometry.move_off_planes_across; process_scan
-  // explains why).
+  // Started from a standstill and not yet odometry.move_off_distance_m from it: walls, and the
+  // ground once the body rolls, locate the scan across the track only
+  // (odometry.move_off_planes_across; process_scan explains why).
   bool moving_off_ = false;
   Eigen::Vector3d standstill_position_ = Eigen::Vector3d::Zero();  // where a standstill start stood
   int scans_since_imu_inconsistent_ = 0;
