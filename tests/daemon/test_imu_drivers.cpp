@@ -4,6 +4,7 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <stdlib.h>
+#include <termios.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -131,6 +132,15 @@ TEST(SerialImu, PseudoTerminalEndToEnd) {
   ASSERT_EQ(::grantpt(master), 0);
   ASSERT_EQ(::unlockpt(master), 0);
   const std::string slave = ::ptsname(master);
+  // A pseudo-terminal starts in canonical mode: bytes written before the driver's thread has made
+  // it raw would be line-edited (a loaded host lost a frame that way). Raw from here on, and held
+  // open so that what is written before the driver opens it waits in the queue.
+  const int slave_fd = ::open(slave.c_str(), O_RDWR | O_NOCTTY);
+  ASSERT_GE(slave_fd, 0);
+  termios raw{};
+  ASSERT_EQ(::tcgetattr(slave_fd, &raw), 0);
+  ::cfmakeraw(&raw);
+  ASSERT_EQ(::tcsetattr(slave_fd, TCSANOW, &raw), 0);
   Config config;
   config.drivers.imu.serial_device = slave;
   config.drivers.imu.serial_baud = 921600;
@@ -154,6 +164,7 @@ TEST(SerialImu, PseudoTerminalEndToEnd) {
   ASSERT_TRUE(test::wait_for([&] { return out.samples() >= 38; }, std::chrono::milliseconds(5000))) << out.samples();
   stop = true;
   t.join();
+  ::close(slave_fd);
   ::close(master);
   std::vector<ImuItem> items;
   ImuItem it;
