@@ -274,6 +274,7 @@ Schema declare_schema(Config& c) {
   s.integer("odometry.window_keyframes", &o.window_keyframes, 1, 1000);
   s.real("odometry.degeneracy_eigenvalue", &o.degeneracy_eigenvalue, 0.0, kInf);
   s.real("odometry.hold_release_yaw_rate_deg_s", &o.hold_release_yaw_rate_deg_s, 0.0, 360.0);
+  s.real("odometry.hold_release_eigenvalue_factor", &o.hold_release_eigenvalue_factor, 1.0, 100.0);
   s.real("odometry.held_bias_trim_window_s", &o.held_bias_trim_window_s, 0.0, 3600.0);
   s.real("odometry.held_bias_trim_gain", &o.held_bias_trim_gain, 0.0, 1.0);
   s.real("odometry.max_prediction_nis", &o.max_prediction_nis, 1.0, kInf);

@@ -31,6 +31,8 @@ TEST(ConfigLoader, ShippedConfigLoadsAndMatchesDefaults) {
   EXPECT_EQ(config.odometry.window_keyframes, 200);
   EXPECT_EQ(config.odometry.deskew, liod::DeskewMode::kImu);
   EXPECT_DOUBLE_EQ(config.odometry.move_off_distance_m, defaults.odometry.move_off_distance_m);
+  EXPECT_DOUBLE_EQ(config.odometry.hold_release_eigenvalue_factor, defaults.odometry.hold_release_eigenvalue_factor);
+  EXPECT_EQ(config.odometry.beam_range_calibration, defaults.odometry.beam_range_calibration);
 }
 
 TEST(ConfigLoader, UnknownKeyNamesFileKeyAndValue) {
@@ -56,6 +58,9 @@ TEST(ConfigLoader, OutOfRangeIsRejected) {
   EXPECT_NE(error_of("odometry:\n  hold_release_yaw_rate_deg_s: -1\n").find("odometry.hold_release_yaw_rate_deg_s"),
             std::string::npos);
   EXPECT_EQ(error_of("odometry:\n  hold_release_yaw_rate_deg_s: 0\n"), "");  // always held (the ablation)
+  // Below 1 a scan could release the hold while still counted degenerate.
+  EXPECT_NE(error_of("odometry:\n  hold_release_eigenvalue_factor: 0.5\n").find("odometry.hold_release_eigenvalue_factor"),
+            std::string::npos);
   // A gain above 1 would overshoot the measured bias error: the trim would oscillate.
   EXPECT_NE(error_of("odometry:\n  held_bias_trim_gain: 1.5\n").find("odometry.held_bias_trim_gain"), std::string::npos);
   EXPECT_EQ(error_of("odometry:\n  held_bias_trim_window_s: 0\n"), "");  // never trimmed

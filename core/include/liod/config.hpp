@@ -90,7 +90,7 @@ struct OdometryConfig {
   bool fit_uncertainty = true;           // a residual's variance includes its fitted plane's / line's uncertainty
   EdgeResidual edge_residual = EdgeResidual::kAlongRay;
   bool beam_calibration = true;  // learn each beam's elevation offset from its ground residuals (beam_calibration.hpp)
-  bool beam_range_calibration = false;  // with beam_calibration: each beam's range offset too (beam_calibration.hpp)
+  bool beam_range_calibration = true;  // with beam_calibration: each beam's range offset too (beam_calibration.hpp)
   bool post_edges = true;  // along_ray only: edges on posts (map points one above the other) match the post's axis
   double post_depth_m = 0.08;  // post_edges: an edge point's post axis lies this far behind it along the ray
   double surface_end_extrapolation = 0.5;  // an edge ending a surface seen at grazing incidence: moved on this share of a step
@@ -108,6 +108,9 @@ struct OdometryConfig {
   /// After a degenerate scan the forward accelerometer bias and gravity tilt are held, except while
   /// the vehicle turns faster than this (deg/s, IMU yaw rate): the turn separates the two. 0: always held.
   double hold_release_yaw_rate_deg_s = 5.0;
+  /// A held forward bias is released only by a scan with this many times degeneracy_eigenvalue of
+  /// information along its weakest direction: a gantry's few scans must not release it (hysteresis).
+  double hold_release_eigenvalue_factor = 2.0;
   /// While the forward bias is held, the median rate of the LiDAR's forward velocity corrections
   /// over this much held time (s; 0: never), times the gain, is taken off the bias (held_bias_trim.hpp).
   double held_bias_trim_window_s = 20.0;
