@@ -120,6 +120,11 @@ const FaultDrive* tunnel_move_off_drive() {
   return simulated_drive("tunnel-move-off-drive", "--route tunnel --seed 9 --duration 25 --max-speed 15");
 }
 
+const FaultDrive* gantries_drive() {
+  return simulated_drive("gantries-drive",
+                         "--route highway --seed 8 --duration 50 --max-speed 15 --no-noise --angle-error-deg 0");
+}
+
 const FaultDrive* rail_faces_drive() {
   return simulated_drive("rail-faces-drive", "--route highway --seed 131 --duration 8 --max-speed 13");
 }

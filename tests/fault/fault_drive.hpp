@@ -45,6 +45,10 @@ const FaultDrive* move_off_drive();
 /// constant section, then off at 1.6 m/s^2 to 15 m/s.
 const FaultDrive* tunnel_move_off_drive();
 
+/// `liod-sim --route highway --seed 8 --duration 50 --max-speed 15 --no-noise --angle-error-deg 0`:
+/// a rolling start at 15 m/s under gantries (23-27 s, 41-45 s) between long stretches of rails.
+const FaultDrive* gantries_drive();
+
 /// `liod-sim --route highway --seed 108 --duration 6 --max-speed 15`: a rolling start at 15 m/s
 /// whose first two scans alone overlap best at 2-3 m/s (speed_search).
 const FaultDrive* aliasing_posts_drive();
