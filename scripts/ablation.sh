@@ -24,6 +24,7 @@ variants=(
   "fixed curvature (5+5)|odometry: {curvature: fixed}"
   "no posts (edges on fitted lines only)|odometry: {post_edges: false}"
   "no beam calibration (published angles as they are)|odometry: {beam_calibration: false}"
+  "no beam range offsets (elevations only)|odometry: {beam_range_calibration: false}"
   "no Hausdorff gating|odometry: {keyframe_gating: distance_angle}"
   "window of 25 keyframes (the paper)|odometry: {window_keyframes: 25}"
   "constant-velocity deskew|odometry: {deskew: constant_velocity}"
