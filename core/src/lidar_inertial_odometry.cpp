@@ -819,7 +819,7 @@ void LidarInertialOdometry::process_scan(const Scan& scan, const ScanFeatures* e
     // released at 2x: 0.33 / 0.06 m; docs/odometry.md, 2026-12-06, second session).
     const double hold_threshold = config_.odometry.degeneracy_eigenvalue *
                                   (result.forward_hold ? config_.odometry.hold_release_eigenvalue_factor : 1.0);
-    const bool degenerate = update.min_translation_eigenvalue < hold_threshold;
+    const bool below_hold_threshold = update.min_translation_eigenvalue < hold_threshold;
     const bool turning = turning_faster_than(start, predicted, update.state, preintegration.duration(),
                                              config_.odometry.hold_release_yaw_rate_deg_s);
     // An IMU that contradicts the LiDAR far beyond its own covariance (a clock step, a sensor
@@ -840,7 +840,8 @@ void LidarInertialOdometry::process_scan(const Scan& scan, const ScanFeatures* e
     // change separates them, and a split held from before the turn puts their mismatch (up to 0.08
     // m/s^2 on tunnel s1) into the speed (tunnel drives 1.85-3.63 -> 0.75-1.65 m ATE). Only while
     // the IMU has agreed with the LiDAR for a while: a clock-stepped IMU turns where the car does not.
-    hold_forward_accel_bias_ = degenerate && !(turning && scans_since_imu_inconsistent_ >= kConsistentScansToRelease);
+    hold_forward_accel_bias_ =
+        below_hold_threshold && !(turning && scans_since_imu_inconsistent_ >= kConsistentScansToRelease);
     state_ = update.state;
     state_.time = t_end;
     covariance_ = update.covariance;
