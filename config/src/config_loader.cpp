@@ -280,6 +280,7 @@ Schema declare_schema(Config& c) {
   s.real("odometry.max_prediction_nis", &o.max_prediction_nis, 1.0, kInf);
   s.boolean("odometry.degeneracy_projection", &o.degeneracy_projection);
   s.real("odometry.init_gyro_bias_std", &o.init_gyro_bias_std, 1e-6, 1.0);
+  s.real("odometry.standstill_gyro_bias_std", &o.standstill_gyro_bias_std, 1e-6, 1.0);
   s.real("odometry.init_accel_bias_std", &o.init_accel_bias_std, 1e-6, 10.0);
   s.real("odometry.init_velocity_std", &o.init_velocity_std, 1e-3, 100.0);
   s.real("odometry.init_tilt_std_deg", &o.init_tilt_std_deg, 0.01, 45.0);

@@ -33,6 +33,7 @@ TEST(ConfigLoader, ShippedConfigLoadsAndMatchesDefaults) {
   EXPECT_DOUBLE_EQ(config.odometry.move_off_distance_m, defaults.odometry.move_off_distance_m);
   EXPECT_DOUBLE_EQ(config.odometry.hold_release_eigenvalue_factor, defaults.odometry.hold_release_eigenvalue_factor);
   EXPECT_EQ(config.odometry.beam_range_calibration, defaults.odometry.beam_range_calibration);
+  EXPECT_DOUBLE_EQ(config.odometry.standstill_gyro_bias_std, defaults.odometry.standstill_gyro_bias_std);
 }
 
 TEST(ConfigLoader, UnknownKeyNamesFileKeyAndValue) {
@@ -64,6 +65,9 @@ TEST(ConfigLoader, OutOfRangeIsRejected) {
   // A gain above 1 would overshoot the measured bias error: the trim would oscillate.
   EXPECT_NE(error_of("odometry:\n  held_bias_trim_gain: 1.5\n").find("odometry.held_bias_trim_gain"), std::string::npos);
   EXPECT_EQ(error_of("odometry:\n  held_bias_trim_window_s: 0\n"), "");  // never trimmed
+  // A zero std would freeze the gyro bias for good: the LiDAR could never correct it.
+  EXPECT_NE(error_of("odometry:\n  standstill_gyro_bias_std: 0\n").find("odometry.standstill_gyro_bias_std"),
+            std::string::npos);
   // The local map's voxels hold at most 32 points: more is an error, not a silent cap.
   EXPECT_NE(error_of("odometry:\n  map_points_per_voxel: 33\n").find("[1, 32]"), std::string::npos);
   EXPECT_EQ(error_of("odometry:\n  map_points_per_voxel: 32\n"), "");

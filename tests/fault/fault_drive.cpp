@@ -125,6 +125,11 @@ const FaultDrive* gantries_drive() {
                          "--route highway --seed 8 --duration 50 --max-speed 15 --no-noise --angle-error-deg 0");
 }
 
+const FaultDrive* tunnel_heading_drive() {
+  return simulated_drive("tunnel-heading-drive",
+                         "--route tunnel --seed 10 --duration 40 --max-speed 15 --no-noise --angle-error-deg 0");
+}
+
 const FaultDrive* rail_faces_drive() {
   return simulated_drive("rail-faces-drive", "--route highway --seed 131 --duration 8 --max-speed 13");
 }

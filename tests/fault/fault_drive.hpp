@@ -49,6 +49,10 @@ const FaultDrive* tunnel_move_off_drive();
 /// a rolling start at 15 m/s under gantries (23-27 s, 41-45 s) between long stretches of rails.
 const FaultDrive* gantries_drive();
 
+/// `liod-sim --route tunnel --seed 10 --duration 40 --max-speed 15 --no-noise --angle-error-deg 0`: 3 s at
+/// rest inside a tunnel, then off at 1.6 m/s^2 (a noise-free IMU: its gyro bias is zero).
+const FaultDrive* tunnel_heading_drive();
+
 /// `liod-sim --route highway --seed 108 --duration 6 --max-speed 15`: a rolling start at 15 m/s
 /// whose first two scans alone overlap best at 2-3 m/s (speed_search).
 const FaultDrive* aliasing_posts_drive();

@@ -117,6 +117,8 @@ struct OdometryConfig {
   double held_bias_trim_gain = 0.5;
   bool degeneracy_projection = false;   // true: degenerate directions get no LiDAR update (else flagged only)
   double init_gyro_bias_std = 0.01;      // rad/s
+  /// A start decided a standstill takes the gyro's mean at rest for its bias, known to this (rad/s).
+  double standstill_gyro_bias_std = 0.001;
   double init_accel_bias_std = 0.2;      // m/s^2
   double init_velocity_std = 20.0;       // m/s: unknown speed at a rolling start
   double init_tilt_std_deg = 5.0;

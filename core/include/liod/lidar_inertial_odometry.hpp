@@ -127,6 +127,8 @@ class LidarInertialOdometry {
   std::optional<double> search_speed(const Scan& scan, BodyMotion motion);
   void start_at_speed(double speed);
   void settle_gyro_bias_at_rest(double from, double to);
+  /// A standstill start: the gyro bias, measured at rest, gets odometry.standstill_gyro_bias_std.
+  void trust_gyro_bias_measured_at_rest();
   /// What the gyro's roll-and-pitch rocking says of the motion up to `time` (body_rocking.hpp).
   BodyMotion body_motion_until(double time) const;
   std::optional<OdometryResult> process(const Scan& scan, const ScanFeatures* extracted);
