@@ -452,7 +452,7 @@ TEST(FaultInjection, MovingOffInATunnelDoesNotTeachTheGyroBias) {
   // No fault: moving off inside a tunnel, the standstill's keyframe, nearly all of the map, turned
   // the pose a little each scan, and with the gyro bias at the start's wide prior the bias about
   // the vertical learned the turn (this IMU has none): the heading turned 14.6 deg over the first
-  // 14 s and the drive read 1.33 m ATE. The bias measured at rest is trusted to
+  // 20 s and the drive read 1.33 m ATE. The bias measured at rest is trusted to
   // odometry.standstill_gyro_bias_std: 0.1 deg, 0.32 m.
   const auto run = run_with_faults(*drive, {});
   common_checks(*drive, run, "move off in a tunnel, noise-free", 0.0, 0.7);
