@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace liod {
 namespace {
@@ -61,6 +62,41 @@ Eigen::Vector3f surface_end_shift(const Eigen::Vector3f& end, const Eigen::Vecto
   const float length = step.norm();
   if (length <= kMinExtrapolatedStepM || length <= kMinGrazingStepRatio * face_on_step) return Eigen::Vector3f::Zero();
   return static_cast<float>(extrapolation) * step;
+}
+
+constexpr float kMaxExcessDepthM = 0.02F;  // range noise and sampling
+
+std::optional<Eigen::Vector3f> narrow_run_axis(const float* x, const float* y, const float* z, int first, int last) {
+  if (last <= first) return std::nullopt;
+  Eigen::Vector2f towards = Eigen::Vector2f::Zero();
+  float height = 0.0F;
+  for (int j = first; j <= last; ++j) {
+    towards += Eigen::Vector2f(x[j], y[j]);
+    height += z[j];
+  }
+  const int count = last - first + 1;
+  height /= static_cast<float>(count);
+  if (towards.norm() < 1e-6F) return std::nullopt;
+  const Eigen::Vector2f along = towards.normalized();
+  const Eigen::Vector2f across(-along.y(), along.x());
+  float lowest = std::numeric_limits<float>::infinity();
+  float highest = -std::numeric_limits<float>::infinity();
+  float nearest = std::numeric_limits<float>::infinity();
+  float farthest = -std::numeric_limits<float>::infinity();
+  for (int j = first; j <= last; ++j) {
+    const Eigen::Vector2f q(x[j], y[j]);
+    lowest = std::min(lowest, across.dot(q));
+    highest = std::max(highest, across.dot(q));
+    nearest = std::min(nearest, along.dot(q));
+    farthest = std::max(farthest, along.dot(q));
+  }
+  const float width = (highest - lowest) * static_cast<float>(count) / static_cast<float>(count - 1);
+  // A compact section shows no more depth than width (a square's or a circle's visible side at
+  // most as much); a sliver of a long face seen at grazing incidence (a rail's band between the
+  // ground's returns, which moves with the viewpoint) shows far more.
+  if (farthest - nearest > width + kMaxExcessDepthM) return std::nullopt;
+  const Eigen::Vector2f axis = (nearest + 0.5F * width) * along + 0.5F * (lowest + highest) * across;
+  return Eigen::Vector3f(axis.x(), axis.y(), height);
 }
 
 int curvature_neighbourhood_size(double range_m, CurvatureNeighbourhood mode) {
@@ -204,6 +240,43 @@ void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uin
                              params_.surface_end_extrapolation);
   };
 
+  // An edge that ends a narrow run standing out before both of its neighbours (a post, a pole):
+  // post_depth_m before the run's axis, along the horizontal ray, instead of where the return was.
+  constexpr int kMaxRunReturns = 40;
+  constexpr int kMinRunReturns = 3;
+  auto post_run_shift = [&](int k) -> std::optional<Eigen::Vector3f> {
+    int first = -1;
+    int last = -1;
+    if (k + 1 < n && jumps[k] && range[k] < range[k + 1]) {
+      last = k;
+      for (int j = k; j > 0 && k - j < kMaxRunReturns; --j) {
+        if (jumps[j - 1]) {
+          if (range[j] < range[j - 1]) first = j;
+          break;
+        }
+      }
+    } else if (k > 0 && jumps[k - 1] && range[k] < range[k - 1]) {
+      first = k;
+      for (int j = k; j + 1 < n && j - k < kMaxRunReturns; ++j) {
+        if (jumps[j]) {
+          if (range[j] < range[j + 1]) last = j;
+          break;
+        }
+      }
+    }
+    if (first < 0 || last < first + kMinRunReturns - 1 ||
+        gaps_before_[static_cast<std::size_t>(last)] != gaps_before_[static_cast<std::size_t>(first)]) {
+      return std::nullopt;
+    }
+    const Eigen::Vector3f a(x[first], y[first], z[first]);
+    const Eigen::Vector3f b(x[last], y[last], z[last]);
+    if ((a - b).norm() > static_cast<float>(params_.post_max_width_m)) return std::nullopt;
+    const auto axis = narrow_run_axis(x, y, z, first, last);
+    if (!axis) return std::nullopt;
+    const Eigen::Vector3f along = Eigen::Vector3f(axis->x(), axis->y(), 0.0F).normalized();
+    return Eigen::Vector3f(*axis - static_cast<float>(params_.post_depth_m) * along - Eigen::Vector3f(x[k], y[k], z[k]));
+  };
+
   // Per sector: the sharpest points become edges (spread out), the flattest ones planes.
   const int sectors = std::max(1, params_.sectors_per_ring);
   for (int s = 0; s < sectors; ++s) {
@@ -223,7 +296,8 @@ void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uin
       const std::uint32_t k = candidate.position;
       if (excluded_[k]) continue;
       out.edges.push_back(ring[k]);
-      out.edge_shifts.push_back(surface_end_step(static_cast<int>(k)));
+      const auto on_post = params_.post_max_width_m > 0.0 ? post_run_shift(static_cast<int>(k)) : std::nullopt;
+      out.edge_shifts.push_back(on_post ? *on_post : surface_end_step(static_cast<int>(k)));
       ++picked;
       // Neighbours of an edge would duplicate it.
       const int lo = std::max(0, static_cast<int>(k) - kMaxHalf);

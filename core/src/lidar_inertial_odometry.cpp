@@ -100,6 +100,8 @@ FeatureParams LidarInertialOdometry::feature_params(const Config& config) {
   p.sectors_per_ring = o.sectors_per_ring;
   p.max_edges_per_sector = o.max_edges_per_sector;
   p.surface_end_extrapolation = o.surface_end_extrapolation;
+  p.post_max_width_m = o.post_edges ? o.post_max_width_m : 0.0;
+  p.post_depth_m = o.post_depth_m;
   if ((o.crop_box_min_m.array() < o.crop_box_max_m.array()).all()) {
     CropBox box;
     box.sensor_to_body.linear() = extrinsics.lidar_to_imu_rotation.toRotationMatrix().cast<float>();

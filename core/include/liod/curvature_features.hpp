@@ -49,6 +49,11 @@ struct FeatureParams {
   /// An edge point that ends a surface seen at grazing incidence (the ring's range jumps beyond
   /// it) is moved on by this share of its step from the surface's previous return; 0: never.
   double surface_end_extrapolation = 0.5;
+  /// An edge that ends a ring's run of returns standing out before both neighbours, at most this
+  /// wide (a post, a pole), is moved to post_depth_m before the run's axis (narrow_run_axis) along
+  /// the horizontal ray, where the post model (map_correspondence.hpp) expects its surface; 0: never.
+  double post_max_width_m = 0.0;
+  double post_depth_m = 0.08;
   std::optional<CropBox> self_crop;  // the vehicle's own body
 };
 
@@ -74,6 +79,19 @@ struct ScanFeatures {
 /// kMinExtrapolatedStepM, else zero. end: the edge point; previous: the ring's return before it on
 /// the same surface.
 Eigen::Vector3f surface_end_shift(const Eigen::Vector3f& end, const Eigen::Vector3f& previous, double extrapolation);
+
+/// The axis of a narrow object from one ring's returns on it, first..last (LiDAR frame, the sensor
+/// at the origin, z up): for a centrally symmetric section (round, or square at any angle) the
+/// extremes across the ray are symmetric about the axis, and the nearest point along the ray lies
+/// as far before it as the extremes lie beside it (both are the section's support, in
+/// perpendicular directions, equal for circles and squares). So the axis is midway across and half
+/// the width behind the nearest return; the width is widened by one return's share, as the
+/// extreme returns fall within the silhouette by half a step each on average. An edge point on
+/// the post itself lies 0-11 cm before a 16 cm post's axis depending on the view and on which end
+/// of the run it is; taken for a constant depth, that error repeats post after post.
+/// Returns the axis at the returns' mean height; nothing for fewer than two returns, or for
+/// returns deeper along the ray than wide (a grazing face's sliver, not a compact section).
+std::optional<Eigen::Vector3f> narrow_run_axis(const float* x, const float* y, const float* z, int first, int last);
 
 /// Reuses its buffers from scan to scan, so steady-state extraction does not allocate.
 class FeatureExtractor {
