@@ -96,31 +96,37 @@ TEST(CurvatureFeatures, OccludedFarSideIsExcluded) {
   for (auto i : features.planes) EXPECT_TRUE(i < 95 || i >= 115) << "plane next to the occlusion at " << i;
 }
 
-// One beam 12.9 deg below the horizon, 1.83 m above a flat road, sweeping past a guard-rail post
-// (16 cm square, 4.35 m to the right, 4.7 m ahead): the beam meets the post 0.34 m above the road
-// at 6.5 m, the ground beside it at 7.95 m. A post below a rail stands out from the ground behind
-// it by only 1-1.5 m.
-liod::Scan post_before_the_ground_scan() {
+// One beam 12.9 deg below the horizon, 1.83 m above a flat road, sweeping past one post standing
+// on it: a square of half side `half` turned by `yaw`, or (round) a circle of radius `half`; `count`
+// returns 0.2 deg apart from azimuth `first_deg`.
+liod::Scan post_scan(const Eigen::Vector2d& centre, double half, double yaw, bool round, double first_deg, int count) {
   liod::Scan scan;
   scan.beam_count = 1;
   const double down = std::tan(12.9 * M_PI / 180.0);
   const double ground = 1.83 / down;
-  for (int i = 0; i < 400; ++i) {
-    const double az = (-60.1 + 0.2 * i) * M_PI / 180.0;
+  const Eigen::Rotation2Dd to_post(-yaw);
+  for (int i = 0; i < count; ++i) {
+    const double az = (first_deg + 0.2 * i) * M_PI / 180.0;
     const Eigen::Vector2d dir(std::cos(az), std::sin(az));
     double reach = ground;
-    // The ray's entry into the post's square [4.65, 4.81] x [-4.43, -4.27] (slab test).
-    double enter = 0.0;
-    double leave = 1e9;
-    const Eigen::Vector2d lo(4.65, -4.43);
-    const Eigen::Vector2d hi(4.81, -4.27);
-    for (int a = 0; a < 2; ++a) {
-      const double t0 = lo(a) / dir(a);
-      const double t1 = hi(a) / dir(a);
-      enter = std::max(enter, std::min(t0, t1));
-      leave = std::min(leave, std::max(t0, t1));
+    if (round) {
+      // |t dir - centre| = half: t = dir . centre -+ sqrt(...).
+      const double b = dir.dot(centre);
+      const double disc = b * b - (centre.squaredNorm() - half * half);
+      if (disc >= 0.0 && b - std::sqrt(disc) > 0.0) reach = std::min(reach, b - std::sqrt(disc));
+    } else {
+      const Eigen::Vector2d o = to_post * (-centre);  // the sensor in the post's frame
+      const Eigen::Vector2d d = to_post * dir;
+      double enter = 0.0;
+      double leave = 1e9;
+      for (int a = 0; a < 2; ++a) {
+        const double t0 = (-half - o(a)) / d(a);
+        const double t1 = (half - o(a)) / d(a);
+        enter = std::max(enter, std::min(t0, t1));
+        leave = std::min(leave, std::max(t0, t1));
+      }
+      if (enter <= leave && enter < reach) reach = enter;
     }
-    if (enter <= leave && enter < reach) reach = enter;
     liod::LidarPoint p;
     p.x = static_cast<float>(reach * dir.x());
     p.y = static_cast<float>(reach * dir.y());
@@ -129,6 +135,14 @@ liod::Scan post_before_the_ground_scan() {
     scan.points.push_back(p);
   }
   return scan;
+}
+
+// One beam 12.9 deg below the horizon, 1.83 m above a flat road, sweeping past a guard-rail post
+// (16 cm square, 4.35 m to the right, 4.7 m ahead): the beam meets the post 0.34 m above the road
+// at 6.5 m, the ground beside it at 7.95 m. A post below a rail stands out from the ground behind
+// it by only 1-1.5 m.
+liod::Scan post_before_the_ground_scan() {
+  return post_scan(Eigen::Vector2d(4.73, -4.35), 0.08, 0.0, false, -60.1, 400);
 }
 
 TEST(CurvatureFeatures, ALowPostBeforeTheGroundIsAnEdge) {
@@ -260,47 +274,6 @@ TEST(CurvatureFeatures, SurfaceEndShiftOnlyAtGrazingIncidence) {
   EXPECT_EQ(liod::surface_end_shift(shallow_end, shallow_prev, 0.5), Eigen::Vector3f::Zero());
 }
 
-// One beam 12.9 deg below the horizon, 1.83 m above a flat road, sweeping past one post standing
-// on it: a square of half side `half` turned by `yaw`, or (round) a circle of radius `half`.
-liod::Scan post_scan(const Eigen::Vector2d& centre, double half, double yaw, bool round) {
-  liod::Scan scan;
-  scan.beam_count = 1;
-  const double down = std::tan(12.9 * M_PI / 180.0);
-  const double ground = 1.83 / down;
-  const double bearing = std::atan2(centre.y(), centre.x()) * 180.0 / M_PI;
-  const Eigen::Rotation2Dd to_post(-yaw);
-  for (int i = 0; i < 600; ++i) {
-    const double az = (bearing - 60.1 + 0.2 * i) * M_PI / 180.0;
-    const Eigen::Vector2d dir(std::cos(az), std::sin(az));
-    double reach = ground;
-    if (round) {
-      // |t dir - centre| = half: t = dir . centre -+ sqrt(...).
-      const double b = dir.dot(centre);
-      const double disc = b * b - (centre.squaredNorm() - half * half);
-      if (disc >= 0.0 && b - std::sqrt(disc) > 0.0) reach = std::min(reach, b - std::sqrt(disc));
-    } else {
-      const Eigen::Vector2d o = to_post * (-centre);  // the sensor in the post's frame
-      const Eigen::Vector2d d = to_post * dir;
-      double enter = 0.0;
-      double leave = 1e9;
-      for (int a = 0; a < 2; ++a) {
-        const double t0 = (-half - o(a)) / d(a);
-        const double t1 = (half - o(a)) / d(a);
-        enter = std::max(enter, std::min(t0, t1));
-        leave = std::min(leave, std::max(t0, t1));
-      }
-      if (enter <= leave && enter < reach) reach = enter;
-    }
-    liod::LidarPoint p;
-    p.x = static_cast<float>(reach * dir.x());
-    p.y = static_cast<float>(reach * dir.y());
-    p.z = static_cast<float>(-reach * down);
-    p.time = static_cast<float>(i * 55.56e-6);
-    scan.points.push_back(p);
-  }
-  return scan;
-}
-
 TEST(CurvatureFeatures, NarrowRunEdgesArePlacedByTheAxisFromAnySide) {
   // Guard-rail posts passed at 4.35 m, from 6 m ahead to abeam, square (turned 0 and 30 deg) and
   // round. The post model takes the axis post_depth_m behind an edge along its horizontal ray:
@@ -316,7 +289,7 @@ TEST(CurvatureFeatures, NarrowRunEdgesArePlacedByTheAxisFromAnySide) {
   for (const double ahead : {6.0, 4.35, 2.5, 1.0, 0.0}) {
     for (const auto& [yaw, round] : {std::pair{0.0, false}, std::pair{0.52, false}, std::pair{0.0, true}}) {
       const Eigen::Vector2d centre(ahead, -4.35);
-      const liod::Scan scan = post_scan(centre, 0.08, yaw, round);
+      const liod::Scan scan = post_scan(centre, 0.08, yaw, round, std::atan2(-4.35, ahead) * 180.0 / M_PI - 60.1, 600);
       liod::FeatureExtractor extractor(params);
       liod::ScanFeatures features;
       extractor.extract(scan, features);
@@ -345,7 +318,7 @@ TEST(CurvatureFeatures, NarrowRunAxisOfARoundAndASquareSection) {
   for (const double yaw : {-1.0, 0.0, 0.3, 0.785}) {
     for (const bool round : {false, true}) {
       const Eigen::Vector2d centre(5.0, 3.3);
-      const liod::Scan scan = post_scan(centre, 0.08, yaw, round);
+      const liod::Scan scan = post_scan(centre, 0.08, yaw, round, std::atan2(3.3, 5.0) * 180.0 / M_PI - 60.1, 600);
       std::vector<float> x, y, z;
       for (const auto& p : scan.points) {
         if (std::hypot(static_cast<double>(p.x) - centre.x(), static_cast<double>(p.y) - centre.y()) > 0.2) continue;
