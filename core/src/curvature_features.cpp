@@ -245,26 +245,15 @@ void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uin
   constexpr int kMaxRunReturns = 40;
   constexpr int kMinRunReturns = 3;
   auto post_run_shift = [&](int k) -> std::optional<Eigen::Vector3f> {
-    int first = -1;
-    int last = -1;
-    if (k + 1 < n && jumps[k] && range[k] < range[k + 1]) {
-      last = k;
-      for (int j = k; j > 0 && k - j < kMaxRunReturns; --j) {
-        if (jumps[j - 1]) {
-          if (range[j] < range[j - 1]) first = j;
-          break;
-        }
-      }
-    } else if (k > 0 && jumps[k - 1] && range[k] < range[k - 1]) {
-      first = k;
-      for (int j = k; j + 1 < n && j - k < kMaxRunReturns; ++j) {
-        if (jumps[j]) {
-          if (range[j] < range[j + 1]) last = j;
-          break;
-        }
-      }
-    }
-    if (first < 0 || last < first + kMinRunReturns - 1 ||
+    // The run of returns around k without a range jump, k at one of its ends, both ends nearer
+    // than the returns beyond them.
+    int first = k;
+    while (first > 0 && k - first < kMaxRunReturns - 1 && !jumps[first - 1]) --first;
+    int last = k;
+    while (last + 1 < n && last - k < kMaxRunReturns - 1 && !jumps[last]) ++last;
+    const bool stands_out = first > 0 && jumps[first - 1] && range[first] < range[first - 1] && last + 1 < n &&
+                            jumps[last] && range[last] < range[last + 1];
+    if (!stands_out || (k != first && k != last) || last < first + kMinRunReturns - 1 ||
         gaps_before_[static_cast<std::size_t>(last)] != gaps_before_[static_cast<std::size_t>(first)]) {
       return std::nullopt;
     }
