@@ -264,6 +264,7 @@ Schema declare_schema(Config& c) {
   s.real("odometry.post_depth_m", &o.post_depth_m, 0.0, 1.0);
   s.real("odometry.surface_end_extrapolation", &o.surface_end_extrapolation, 0.0, 1.0);
   s.real("odometry.post_max_width_m", &o.post_max_width_m, 0.0, 2.0);
+  s.real("odometry.crossing_edge_tolerance_m", &o.crossing_edge_tolerance_m, 0.0, 1.0);
   s.boolean("odometry.move_off_planes_across", &o.move_off_planes_across);
   s.real("odometry.move_off_distance_m", &o.move_off_distance_m, 0.0, 1000.0);
   s.boolean("odometry.beam_calibration", &o.beam_calibration);

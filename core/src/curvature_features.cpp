@@ -128,7 +128,30 @@ void FeatureExtractor::extract(const Scan& scan, ScanFeatures& out) {
     }
     rings_[p.ring].push_back(i);
   }
-  for (const auto& ring : rings_) process_ring(scan, ring, out);
+  for (std::size_t ring_id = 0; ring_id < rings_.size(); ++ring_id) process_ring(scan, ring_id, out);
+}
+
+bool FeatureExtractor::surface_continues(const Scan& scan, std::size_t ring_id, int step, const Eigen::Vector2f& end,
+                                         const Eigen::Vector2f& inner, float end_time, int side) const {
+  const auto other = static_cast<std::ptrdiff_t>(ring_id) + step;
+  if (other < 0 || other >= static_cast<std::ptrdiff_t>(rings_.size())) return false;
+  const Eigen::Vector2f along = end - inner;
+  if (along.norm() < 1e-3F) return false;
+  const Eigen::Vector2f direction = along.normalized();
+  const Eigen::Vector2f normal(-direction.y(), direction.x());
+  const auto tolerance = static_cast<float>(params_.crossing_edge_tolerance_m);
+  // Two to four firings on: one firing past the edge the next ring may still meet the silhouette
+  // of a vertical post (the beams of one firing are fired a few microseconds apart).
+  const float a = end_time + static_cast<float>(side) * 1.5F * kFiringPeriodS;
+  const float b = end_time + static_cast<float>(side) * 4.5F * kFiringPeriodS;
+  const auto& ring = rings_[static_cast<std::size_t>(other)];
+  auto it = std::lower_bound(ring.begin(), ring.end(), std::min(a, b),
+                             [&](std::uint32_t i, float t) { return scan.points[i].time < t; });
+  for (; it != ring.end() && scan.points[*it].time <= std::max(a, b); ++it) {
+    const Eigen::Vector2f q(scan.points[*it].x, scan.points[*it].y);
+    if ((q - end).dot(direction) > 0.0F && std::abs((q - end).dot(normal)) < tolerance) return true;
+  }
+  return false;
 }
 
 void FeatureExtractor::gather_ring(const Scan& scan, const std::vector<std::uint32_t>& ring) {
@@ -148,7 +171,8 @@ void FeatureExtractor::gather_ring(const Scan& scan, const std::vector<std::uint
   }
 }
 
-void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uint32_t>& ring, ScanFeatures& out) {
+void FeatureExtractor::process_ring(const Scan& scan, std::size_t ring_id, ScanFeatures& out) {
+  const std::vector<std::uint32_t>& ring = rings_[ring_id];
   const int n = static_cast<int>(ring.size());
   constexpr int kMaxHalf = 5;
   if (n < 2 * kMaxHalf + 1) return;
@@ -163,7 +187,7 @@ void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uin
   // Consecutive firings of one beam are 55.6 us apart at 10 Hz; allow a few missing.
   // gaps_before_[k]: how many of the steps k' -> k' + 1 with k' < k are gaps, so that a window's
   // test is one difference instead of a loop over its steps.
-  constexpr float kMaxFiringGap = 4.0F * 55.56e-6F;
+  constexpr float kMaxFiringGap = 4.0F * kFiringPeriodS;
   gaps_before_.resize(static_cast<std::size_t>(n));
   gaps_before_[0] = 0;
   for (int k = 0; k + 1 < n; ++k) {
@@ -266,6 +290,38 @@ void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uin
     return Eigen::Vector3f(*axis - static_cast<float>(params_.post_depth_m) * along - Eigen::Vector3f(x[k], y[k], z[k]));
   };
 
+  // An edge where the ring runs off a surface across a horizontal border: beyond it the ring
+  // reaches farther, and the next ring up or down carries the surface on past it.
+  constexpr int kCrossingBaseline = 6;  // returns back along the run for the surface's direction
+  auto crosses_border = [&](int k) {
+    for (const int side : {1, -1}) {
+      // The surface's last return: k or one of the next two towards `side`, where the ring then
+      // reaches farther (a jump, or a surface behind within the jump's threshold).
+      int end = -1;
+      for (int j = k; j != k + 3 * side && j + side >= 0 && j + side < n; j += side) {
+        if (range[j + side] > range[j] * 1.02F) {
+          end = j;
+          break;
+        }
+      }
+      if (end < 0) continue;
+      int inner = end;
+      while (inner - side >= 0 && inner - side < n && std::abs(inner - end) < kCrossingBaseline &&
+             !jumps[std::min(inner, inner - side)]) {
+        inner -= side;
+      }
+      if (inner == end) continue;
+      const Eigen::Vector2f last(x[end], y[end]);
+      const Eigen::Vector2f before(x[inner], y[inner]);
+      const float t = ring_time_[static_cast<std::size_t>(end)];
+      if (surface_continues(scan, ring_id, 1, last, before, t, side) ||
+          surface_continues(scan, ring_id, -1, last, before, t, side)) {
+        return true;
+      }
+    }
+    return false;
+  };
+
   // Per sector: the sharpest points become edges (spread out), the flattest ones planes.
   const int sectors = std::max(1, params_.sectors_per_ring);
   for (int s = 0; s < sectors; ++s) {
@@ -284,11 +340,13 @@ void FeatureExtractor::process_ring(const Scan& scan, const std::vector<std::uin
       if (candidate.curvature <= static_cast<float>(params_.edge_curvature)) break;
       const std::uint32_t k = candidate.position;
       if (excluded_[k]) continue;
-      out.edges.push_back(ring[k]);
-      const auto on_post = params_.post_max_width_m > 0.0 ? post_run_shift(static_cast<int>(k)) : std::nullopt;
-      out.edge_shifts.push_back(on_post ? *on_post : surface_end_step(static_cast<int>(k)));
-      ++picked;
-      // Neighbours of an edge would duplicate it.
+      if (params_.crossing_edge_tolerance_m <= 0.0 || !crosses_border(static_cast<int>(k))) {
+        out.edges.push_back(ring[k]);
+        const auto on_post = params_.post_max_width_m > 0.0 ? post_run_shift(static_cast<int>(k)) : std::nullopt;
+        out.edge_shifts.push_back(on_post ? *on_post : surface_end_step(static_cast<int>(k)));
+        ++picked;
+      }
+      // Neighbours of an edge would duplicate it (of a dropped one, stand in for it).
       const int lo = std::max(0, static_cast<int>(k) - kMaxHalf);
       const int hi = std::min(n - 1, static_cast<int>(k) + kMaxHalf);
       for (int m = lo; m <= hi; ++m) excluded_[static_cast<std::size_t>(m)] = 1;

@@ -102,6 +102,7 @@ FeatureParams LidarInertialOdometry::feature_params(const Config& config) {
   p.surface_end_extrapolation = o.surface_end_extrapolation;
   p.post_max_width_m = o.post_edges ? o.post_max_width_m : 0.0;
   p.post_depth_m = o.post_depth_m;
+  p.crossing_edge_tolerance_m = o.crossing_edge_tolerance_m;
   if ((o.crop_box_min_m.array() < o.crop_box_max_m.array()).all()) {
     CropBox box;
     box.sensor_to_body.linear() = extrinsics.lidar_to_imu_rotation.toRotationMatrix().cast<float>();

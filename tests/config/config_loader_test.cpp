@@ -35,6 +35,7 @@ TEST(ConfigLoader, ShippedConfigLoadsAndMatchesDefaults) {
   EXPECT_EQ(config.odometry.beam_range_calibration, defaults.odometry.beam_range_calibration);
   EXPECT_DOUBLE_EQ(config.odometry.standstill_gyro_bias_std, defaults.odometry.standstill_gyro_bias_std);
   EXPECT_DOUBLE_EQ(config.odometry.post_max_width_m, defaults.odometry.post_max_width_m);
+  EXPECT_DOUBLE_EQ(config.odometry.crossing_edge_tolerance_m, defaults.odometry.crossing_edge_tolerance_m);
 }
 
 TEST(ConfigLoader, UnknownKeyNamesFileKeyAndValue) {
@@ -70,6 +71,8 @@ TEST(ConfigLoader, OutOfRangeIsRejected) {
   EXPECT_NE(error_of("odometry:\n  standstill_gyro_bias_std: 0\n").find("odometry.standstill_gyro_bias_std"),
             std::string::npos);
   EXPECT_NE(error_of("odometry:\n  post_max_width_m: -0.1\n").find("odometry.post_max_width_m"), std::string::npos);
+  EXPECT_NE(error_of("odometry:\n  crossing_edge_tolerance_m: -0.01\n").find("odometry.crossing_edge_tolerance_m"),
+            std::string::npos);
   // The local map's voxels hold at most 32 points: more is an error, not a silent cap.
   EXPECT_NE(error_of("odometry:\n  map_points_per_voxel: 33\n").find("[1, 32]"), std::string::npos);
   EXPECT_EQ(error_of("odometry:\n  map_points_per_voxel: 32\n"), "");

@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <utility>
 #include <vector>
 
@@ -334,6 +335,88 @@ TEST(CurvatureFeatures, NarrowRunAxisOfARoundAndASquareSection) {
   }
   const float one[] = {1.0F};
   EXPECT_FALSE(liod::narrow_run_axis(one, one, one, 0, 0).has_value());
+}
+
+// A guard rail passed in the slow lane, LiDAR 1.9 m above a flat road, beams 24 to 4 deg below the
+// horizon 1 deg apart: the rail's face 4.2 m to the right, 0.45-0.8 m above the road, and 16 cm
+// square posts behind it (their faces 12 cm behind the rail's) every 4 m, visible below it. A ring
+// meets the face lower the farther along the road it looks, so each ring runs off the rail across
+// its lower border behind the sensor and onto it across the upper one.
+liod::Scan guard_rail_scan() {
+  liod::Scan scan;
+  const double height = 1.9;
+  const double rail_y = -4.2;
+  const double rail_bottom = 0.45 - height;
+  const double rail_top = 0.8 - height;
+  const double post_half = 0.08;
+  const double post_y = rail_y - 0.12 - post_half;
+  const int rings = 21;
+  scan.beam_count = rings;
+  for (int ring = 0; ring < rings; ++ring) {
+    const double elevation = (-24.0 + ring) * M_PI / 180.0;
+    for (int i = 0; i < 1800; ++i) {
+      // Each beam fires a little later in the turn than the one below (as the Helios's do).
+      const double az = (-180.0 + 0.2 * i + 0.013 * ring) * M_PI / 180.0;
+      const Eigen::Vector3d dir(std::cos(elevation) * std::cos(az), std::cos(elevation) * std::sin(az), std::sin(elevation));
+      double reach = -height / dir.z();
+      if (dir.y() < 0.0) {
+        const double t = rail_y / dir.y();
+        const double z = t * dir.z();
+        if (z >= rail_bottom && z <= rail_top && t < reach) reach = t;
+        for (double post_x = -30.0; post_x <= 30.0; post_x += 4.0) {
+          // The post's box below the rail (above it, hidden behind the rail or its top).
+          double enter = 0.0;
+          double leave = 1e9;
+          const double lo[2] = {post_x - post_half, post_y - post_half};
+          const double hi[2] = {post_x + post_half, post_y + post_half};
+          for (int a = 0; a < 2; ++a) {
+            const double t0 = lo[a] / dir(a);
+            const double t1 = hi[a] / dir(a);
+            enter = std::max(enter, std::min(t0, t1));
+            leave = std::min(leave, std::max(t0, t1));
+          }
+          if (enter <= leave && enter < reach && enter * dir.z() <= rail_bottom) reach = enter;
+        }
+      }
+      liod::LidarPoint p;
+      p.x = static_cast<float>(reach * dir.x());
+      p.y = static_cast<float>(reach * dir.y());
+      p.z = static_cast<float>(reach * dir.z());
+      p.ring = static_cast<std::uint16_t>(ring);
+      p.time = static_cast<float>(i * 55.56e-6);
+      scan.points.push_back(p);
+    }
+  }
+  std::stable_sort(scan.points.begin(), scan.points.end(),
+                   [](const liod::LidarPoint& a, const liod::LidarPoint& b) { return a.time < b.time; });
+  scan.end_time = scan.points.back().time;
+  return scan;
+}
+
+TEST(CurvatureFeatures, ARingRunningOffARailAcrossItsBorderIsNoEdge) {
+  // Where a ring crosses the rail's lower or upper border moves along the rail with the sensor's
+  // pitch: those edges go, the posts' stay.
+  const liod::Scan scan = guard_rail_scan();
+  auto count = [&](double tolerance) {
+    liod::FeatureParams params;
+    params.crossing_edge_tolerance_m = tolerance;
+    liod::FeatureExtractor extractor(params);
+    liod::ScanFeatures features;
+    extractor.extract(scan, features);
+    std::pair<int, int> on_rail_and_posts{0, 0};
+    for (const std::uint32_t e : features.edges) {
+      const auto& p = scan.points[e];
+      if (std::abs(p.y + 4.2F) < 1e-3F) ++on_rail_and_posts.first;
+      if (p.y < -4.3F && p.y > -4.5F && p.z > -1.9F + 0.01F) ++on_rail_and_posts.second;
+    }
+    return on_rail_and_posts;
+  };
+  const auto [rail_kept, posts_kept] = count(0.0);
+  const auto [rail_dropped, posts] = count(0.05);
+  EXPECT_GE(rail_kept, 4) << "the rail's border crossings are edges without the test";
+  EXPECT_EQ(rail_dropped, 0);
+  EXPECT_GE(posts, 4);
+  EXPECT_EQ(posts, posts_kept);
 }
 
 }  // namespace

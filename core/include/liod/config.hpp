@@ -94,7 +94,8 @@ struct OdometryConfig {
   bool post_edges = true;  // along_ray only: edges on posts (map points one above the other) match the post's axis
   double post_depth_m = 0.08;  // post_edges: an edge point's post axis lies this far behind it along the ray
   double surface_end_extrapolation = 0.5;  // an edge ending a surface seen at grazing incidence: moved on this share of a step
-  double post_max_width_m = 0.0;  // post_edges: an edge ending a ring's run this narrow is placed by the run's axis (0: never)
+  double crossing_edge_tolerance_m = 0.1;  // an edge where the ring runs off a surface across a horizontal border that the next ring carries on: dropped (0: kept)
+  double post_max_width_m = 0.4;  // post_edges: an edge ending a ring's run this narrow is placed by the run's axis (0: never)
   bool move_off_planes_across = true;  // after a standstill start, until move_off_distance_m: walls (and once rolling, the ground) locate across the track only
   double move_off_distance_m = 10.0;  // move_off_planes_across lasts until the vehicle is this far from where it stood (and 2 keyframes)
   double keyframe_distance_m = 1.0;

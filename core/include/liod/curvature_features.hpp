@@ -54,6 +54,12 @@ struct FeatureParams {
   /// the horizontal ray, where the post model (map_correspondence.hpp) expects its surface; 0: never.
   double post_max_width_m = 0.0;
   double post_depth_m = 0.08;
+  /// An edge where the ring runs off a surface across its top or bottom border (a guard rail's
+  /// lower edge, a barrier's top) is dropped when the next ring up or down carries the surface on
+  /// beyond it: within this of the horizontal line through the ring's last returns on it. Where a
+  /// ring crosses a nearly horizontal border moves along the border with the sensor's pitch (the
+  /// vehicle squats when it accelerates), so such an edge is no place along the road; 0: keep.
+  double crossing_edge_tolerance_m = 0.0;
   std::optional<CropBox> self_crop;  // the vehicle's own body
 };
 
@@ -101,7 +107,12 @@ class FeatureExtractor {
   void extract(const Scan& scan, ScanFeatures& out);
 
  private:
-  void process_ring(const Scan& scan, const std::vector<std::uint32_t>& ring, ScanFeatures& out);
+  void process_ring(const Scan& scan, std::size_t ring_id, ScanFeatures& out);
+  /// Whether ring ring_id + step (step = -1, +1) carries the surface of the horizontal line
+  /// through `end` and `inner` (the ring's last return on it, fired at end_time, and one before)
+  /// on beyond `end`: two to four firings later (side +1) or earlier (side -1).
+  bool surface_continues(const Scan& scan, std::size_t ring_id, int step, const Eigen::Vector2f& end,
+                         const Eigen::Vector2f& inner, float end_time, int side) const;
   /// Copies the ring's coordinates, times and ranges into ring_*_ in ring order: the windows
   /// below then read consecutive floats instead of chasing indices into the scan.
   void gather_ring(const Scan& scan, const std::vector<std::uint32_t>& ring);
@@ -122,6 +133,8 @@ class FeatureExtractor {
     std::uint32_t position;  // in the ring
   };
   std::vector<Candidate> order_;
+  /// Consecutive firings of one beam at 10 Hz (Helios: 1800 per turn).
+  static constexpr float kFiringPeriodS = 55.56e-6F;
 };
 
 }  // namespace liod
