@@ -23,6 +23,8 @@ variants=(
   "full|"
   "fixed curvature (5+5)|odometry: {curvature: fixed}"
   "no posts (edges on fitted lines only)|odometry: {post_edges: false}"
+  "posts' edges where the returns were (not by their axis)|odometry: {post_max_width_m: 0}"
+  "rail border crossings kept as edges|odometry: {crossing_edge_tolerance_m: 0}"
   "no beam calibration (published angles as they are)|odometry: {beam_calibration: false}"
   "no beam range offsets (elevations only)|odometry: {beam_range_calibration: false}"
   "no Hausdorff gating|odometry: {keyframe_gating: distance_angle}"
