@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -97,6 +98,22 @@ TEST(CurvatureFeatures, OccludedFarSideIsExcluded) {
   for (auto i : features.planes) EXPECT_TRUE(i < 95 || i >= 115) << "plane next to the occlusion at " << i;
 }
 
+// Where the ray origin + t dir (t >= 0) enters the axis-aligned box [lo, hi] (slab method: where it
+// has entered both slabs), if it meets the box.
+std::optional<double> box_entry(const Eigen::Vector2d& origin, const Eigen::Vector2d& dir, const Eigen::Vector2d& lo,
+                                const Eigen::Vector2d& hi) {
+  double enter = 0.0;
+  double leave = 1e9;
+  for (int a = 0; a < 2; ++a) {
+    const double t0 = (lo(a) - origin(a)) / dir(a);
+    const double t1 = (hi(a) - origin(a)) / dir(a);
+    enter = std::max(enter, std::min(t0, t1));
+    leave = std::min(leave, std::max(t0, t1));
+  }
+  if (enter > leave) return std::nullopt;
+  return enter;
+}
+
 // One beam 12.9 deg below the horizon, 1.83 m above a flat road, sweeping past one post standing
 // on it: a square of half side `half` turned by `yaw`, or (round) a circle of radius `half`; `count`
 // returns 0.2 deg apart from azimuth `first_deg`.
@@ -116,17 +133,10 @@ liod::Scan post_scan(const Eigen::Vector2d& centre, double half, double yaw, boo
       const double disc = b * b - (centre.squaredNorm() - half * half);
       if (disc >= 0.0 && b - std::sqrt(disc) > 0.0) reach = std::min(reach, b - std::sqrt(disc));
     } else {
-      const Eigen::Vector2d o = to_post * (-centre);  // the sensor in the post's frame
-      const Eigen::Vector2d d = to_post * dir;
-      double enter = 0.0;
-      double leave = 1e9;
-      for (int a = 0; a < 2; ++a) {
-        const double t0 = (-half - o(a)) / d(a);
-        const double t1 = (half - o(a)) / d(a);
-        enter = std::max(enter, std::min(t0, t1));
-        leave = std::min(leave, std::max(t0, t1));
-      }
-      if (enter <= leave && enter < reach) reach = enter;
+      // In the post's frame, where the sensor is at -centre turned.
+      const auto enter = box_entry(to_post * (-centre), to_post * dir, Eigen::Vector2d(-half, -half),
+                                   Eigen::Vector2d(half, half));
+      if (enter) reach = std::min(reach, *enter);
     }
     liod::LidarPoint p;
     p.x = static_cast<float>(reach * dir.x());
@@ -365,17 +375,10 @@ liod::Scan guard_rail_scan() {
         if (z >= rail_bottom && z <= rail_top && t < reach) reach = t;
         for (double post_x = -30.0; post_x <= 30.0; post_x += 4.0) {
           // The post's box below the rail (above it, hidden behind the rail or its top).
-          double enter = 0.0;
-          double leave = 1e9;
-          const double lo[2] = {post_x - post_half, post_y - post_half};
-          const double hi[2] = {post_x + post_half, post_y + post_half};
-          for (int a = 0; a < 2; ++a) {
-            const double t0 = lo[a] / dir(a);
-            const double t1 = hi[a] / dir(a);
-            enter = std::max(enter, std::min(t0, t1));
-            leave = std::min(leave, std::max(t0, t1));
-          }
-          if (enter <= leave && enter < reach && enter * dir.z() <= rail_bottom) reach = enter;
+          const auto enter = box_entry(Eigen::Vector2d::Zero(), dir.head<2>(),
+                                       Eigen::Vector2d(post_x - post_half, post_y - post_half),
+                                       Eigen::Vector2d(post_x + post_half, post_y + post_half));
+          if (enter && *enter < reach && *enter * dir.z() <= rail_bottom) reach = *enter;
         }
       }
       liod::LidarPoint p;
