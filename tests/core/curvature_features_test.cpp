@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "liod/curvature_features.hpp"
+#include "ray_box.hpp"
 
 namespace {
 
@@ -98,21 +99,7 @@ TEST(CurvatureFeatures, OccludedFarSideIsExcluded) {
   for (auto i : features.planes) EXPECT_TRUE(i < 95 || i >= 115) << "plane next to the occlusion at " << i;
 }
 
-// Where the ray origin + t dir (t >= 0) enters the axis-aligned box [lo, hi] (slab method: where it
-// has entered both slabs), if it meets the box.
-std::optional<double> box_entry(const Eigen::Vector2d& origin, const Eigen::Vector2d& dir, const Eigen::Vector2d& lo,
-                                const Eigen::Vector2d& hi) {
-  double enter = 0.0;
-  double leave = 1e9;
-  for (int a = 0; a < 2; ++a) {
-    const double t0 = (lo(a) - origin(a)) / dir(a);
-    const double t1 = (hi(a) - origin(a)) / dir(a);
-    enter = std::max(enter, std::min(t0, t1));
-    leave = std::min(leave, std::max(t0, t1));
-  }
-  if (enter > leave) return std::nullopt;
-  return enter;
-}
+using liod::test::box_entry;
 
 // One beam 12.9 deg below the horizon, 1.83 m above a flat road, sweeping past one post standing
 // on it: a square of half side `half` turned by `yaw`, or (round) a circle of radius `half`; `count`

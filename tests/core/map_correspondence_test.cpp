@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "liod/map_correspondence.hpp"
+#include "ray_box.hpp"
 
 namespace {
 
@@ -163,13 +164,8 @@ TEST(MapCorrespondence, TwoPointsOfAShortPostGiveItsRangeAlongTheRay) {
 Eigen::Vector3d near_side_hit(const Eigen::Vector3d& sensor, const Eigen::Vector2d& centre, double half, double z) {
   const Eigen::Vector2d from = sensor.head<2>();
   const Eigen::Vector2d d = (centre - from).normalized();
-  double enter = 0.0;  // slab method: the ray enters the square where it has entered both slabs
-  for (int k = 0; k < 2; ++k) {
-    const double t0 = (centre(k) - half - from(k)) / d(k);
-    const double t1 = (centre(k) + half - from(k)) / d(k);
-    enter = std::max(enter, std::min(t0, t1));
-  }
-  const Eigen::Vector2d hit = from + enter * d;
+  const auto enter = liod::test::box_entry(from, d, centre.array() - half, centre.array() + half);
+  const Eigen::Vector2d hit = from + enter.value() * d;
   return {hit.x(), hit.y(), z};
 }
 
