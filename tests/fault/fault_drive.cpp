@@ -138,4 +138,8 @@ const FaultDrive* parked_car_drive() {
   return simulated_drive("parked-car-drive", "--route highway --seed 7 --duration 12 --max-speed 12");
 }
 
+const FaultDrive* crest_start_drive() {
+  return simulated_drive("crest-start-drive", "--route highway --seed 7 --duration 60 --max-speed 15");
+}
+
 }  // namespace liod::test

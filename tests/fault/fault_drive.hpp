@@ -75,6 +75,11 @@ const FaultDrive* rail_faces_drive();
 /// past a car parked on the shoulder (made like the fault drive, in test-data/parked-car-drive/).
 const FaultDrive* parked_car_drive();
 
+/// `liod-sim --route highway --seed 7 --duration 60 --max-speed 15`: a rolling start at 15 m/s over
+/// a crest (the body pitching at 0.009 rad/s for its first seconds), whose speed search runs to its
+/// 2 s limit.
+const FaultDrive* crest_start_drive();
+
 }  // namespace liod::test
 
 #define LIOD_REQUIRE_DRIVE(var, drive)                                                           \
