@@ -32,22 +32,31 @@ constexpr std::int32_t kFullCircle = kAzimuthUnits;
   return p + kHeaderBytes + b * kBlockBytes;
 }
 
-[[nodiscard]] std::int32_t wrap_azimuth(std::int32_t a) noexcept {
-  if (a < 0) return a + kFullCircle;
-  if (a >= kFullCircle) return a - kFullCircle;
-  return a;
-}
-
 const std::vector<std::array<float, 2>>& azimuth_trig() {
   static const std::vector<std::array<float, 2>> table = [] {
-    std::vector<std::array<float, 2>> t(kFullCircle);
-    for (std::int32_t a = 0; a < kFullCircle; ++a) {
+    std::vector<std::array<float, 2>> t(kFullCircle + 1);
+    for (std::int32_t a = 0; a <= kFullCircle; ++a) {
       const double rad = a * 0.01 * kDegToRad;
       t[static_cast<std::size_t>(a)] = {static_cast<float>(std::cos(rad)), static_cast<float>(std::sin(rad))};
     }
     return t;
   }();
   return table;
+}
+
+/// cos/sin of `azimuth` (0.01° units), interpolated between the table's whole steps (error below 4e-9).
+[[nodiscard]] std::array<float, 2> trig_at(std::span<const std::array<float, 2>> trig, float azimuth) noexcept {
+  constexpr auto kTurn = static_cast<float>(kFullCircle);
+  if (!(azimuth >= 0.0F && azimuth < kTurn)) {
+    azimuth = std::fmod(azimuth, kTurn);
+    if (azimuth < 0.0F) azimuth += kTurn;
+    if (!(azimuth >= 0.0F && azimuth < kTurn)) azimuth = 0.0F;  // NaN
+  }
+  const auto whole = std::min(static_cast<std::int32_t>(azimuth), kFullCircle - 1);
+  const float fraction = azimuth - static_cast<float>(whole);
+  const auto& a = trig[static_cast<std::size_t>(whole)];
+  const auto& b = trig[static_cast<std::size_t>(whole) + 1];
+  return {a[0] + fraction * (b[0] - a[0]), a[1] + fraction * (b[1] - a[1])};
 }
 
 }  // namespace
@@ -80,7 +89,7 @@ void MsopDecoder::set_angles(std::span<const double> vertical_deg, std::span<con
     const double el = vertical_deg[i] * kDegToRad;
     lasers_[i].cos_el = static_cast<float>(std::cos(el));
     lasers_[i].sin_el = static_cast<float>(std::sin(el));
-    lasers_[i].horiz_units = static_cast<std::int32_t>(std::lround(horizontal_deg[i] * 100.0));
+    lasers_[i].horizontal_units = static_cast<float>(horizontal_deg[i] * 100.0);
   }
   has_angles_ = true;
 }
@@ -228,11 +237,14 @@ MsopStatus MsopDecoder::decode(std::span<const std::uint8_t> payload, bool dual,
       if (d < min_range || d > max_range) continue;
       const SlotEntry& se = slots[s];
       const LaserEntry& le = lasers_[se.laser];
-      // §3.2: channel azimuth interpolated over the block step; §4: final = + horizontal offset.
-      const std::int32_t az_ch = wrap_azimuth(az[k] + static_cast<std::int32_t>(step * se.az_fraction + 0.5F));
-      const std::int32_t az_final = wrap_azimuth(az_ch + le.horiz_units);
-      const auto& tf = trig_[static_cast<std::size_t>(az_final)];
-      const auto& tc = trig_[static_cast<std::size_t>(az_ch)];
+      // §3.2: channel azimuth interpolated over the block step; §4: final = + horizontal offset. Not
+      // rounded to 0.01° as rs_driver and nebula do: the laser fires where the head has turned to,
+      // and a channel's rounding, the same every turn, turned its points by up to 0.005°: as much as
+      // a unit's own beam angle errors, which the map relays into a heading drift (docs/odometry.md,
+      // "The channel azimuth's rounding").
+      const float az_ch = static_cast<float>(az[k]) + step * se.az_fraction;
+      const auto tf = trig_at(trig_, az_ch + le.horizontal_units);
+      const auto tc = trig_at(trig_, az_ch);
       const float horizontal = d * le.cos_el;
       LidarPoint& pt = out.points[n++];
       // §4 (rs_driver): packet azimuth runs clockwise, hence -sin for a right-handed y-left frame.

@@ -113,13 +113,13 @@ TEST(RsHelios16PReal, MatchesNebulaPerRevolution) {
     const double median = quantile(d, 0.5);
     const double p95 = quantile(d, 0.95);
     EXPECT_LT(median, 0.03);
-    // Same conventions (RX lens offset included, same angles): agreement is at the level of the
-    // 0.01° azimuth quantisation, far below the 3 cm the task allows.
+    // Same conventions (RX lens offset included, same angles): agreement is at the level of
+    // nebula's 0.01° azimuth truncation, far below the 3 cm the task allows.
     EXPECT_LT(median, 0.002);
     EXPECT_LT(p95, 0.01);
     // Stronger: both decoders emit points in packet/slot order, so compare them one by one. They
-    // differ only in rounding the channel azimuth to 0.01° (we round, nebula truncates), i.e. at
-    // most ~0.02° of arc: bound each pair by 1 mm + 0.03° × range.
+    // differ only in nebula truncating the channel azimuth to 0.01° (we interpolate it, as the head
+    // turns), i.e. less than 0.01° of arc: bound each pair by 1 mm + 0.03° × range.
     ASSERT_EQ(scan.points.size(), reference.size());
     std::size_t outliers = 0;
     for (std::size_t k = 0; k < reference.size(); ++k) {

@@ -89,7 +89,7 @@ class MsopDecoder {
   struct LaserEntry {
     float cos_el = 1.0F;
     float sin_el = 0.0F;
-    std::int32_t horiz_units = 0;  // 0.01°
+    float horizontal_units = 0.0F;  // 0.01°
   };
 
   void build_slot_tables() noexcept;
@@ -103,9 +103,8 @@ class MsopDecoder {
   std::array<SlotEntry, 32> dual_slots_{};
   std::array<LaserEntry, 32> lasers_{};
   std::array<std::uint16_t, 32> rings_{};
-  /// cos/sin of every azimuth in 0.01° steps: the decoders this one is checked against quantise
-  /// azimuth the same way, and it keeps trigonometry out of the per-point loop. One table, built
-  /// once and shared by every decoder.
+  /// cos/sin of every azimuth in 0.01° steps (one more at 360° for the interpolation), built once
+  /// and shared by every decoder: it keeps trigonometry out of the per-point loop.
   std::span<const std::array<float, 2>> trig_;
 };
 
