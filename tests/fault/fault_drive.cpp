@@ -142,4 +142,8 @@ const FaultDrive* crest_start_drive() {
   return simulated_drive("crest-start-drive", "--route highway --seed 7 --duration 60 --max-speed 15");
 }
 
+const FaultDrive* tunnel_yaw_bias_drive() {
+  return simulated_drive("tunnel-yaw-bias-drive", "--route tunnel --seed 7 --duration 40 --max-speed 15");
+}
+
 }  // namespace liod::test

@@ -80,6 +80,10 @@ const FaultDrive* parked_car_drive();
 /// 2 s limit.
 const FaultDrive* crest_start_drive();
 
+/// `liod-sim --route tunnel --seed 7 --duration 40 --max-speed 15`: a static start inside the
+/// tunnel whose moving off turned the heading.
+const FaultDrive* tunnel_yaw_bias_drive();
+
 }  // namespace liod::test
 
 #define LIOD_REQUIRE_DRIVE(var, drive)                                                           \

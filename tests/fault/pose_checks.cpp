@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include "liod/eval/alignment.hpp"
 #include "liod/eval/association.hpp"
@@ -76,6 +77,25 @@ Jump largest_jump(const std::vector<pose::PoseMessage>& poses, const eval::Traje
       worst.at = poses[i].time;
     }
     worst.rotation_deg = std::max(worst.rotation_deg, degrees(dr));
+  }
+  return worst;
+}
+
+double largest_attitude_drift_deg(const std::vector<pose::PoseMessage>& poses, const eval::Trajectory& truth) {
+  std::optional<Eigen::Isometry3d> first;
+  std::optional<Eigen::Isometry3d> first_truth;
+  double worst = 0.0;
+  for (const auto& p : poses) {
+    if (p.type != pose::MessageType::ScanPose || (p.flags & pose::kInitializing) != 0) continue;
+    const Eigen::Isometry3d estimate = to_isometry(p);
+    const Eigen::Isometry3d true_pose = truth_at(truth, p.time);
+    if (!first) {
+      first = estimate;
+      first_truth = true_pose;
+    }
+    const Eigen::Matrix3d turned = first->linear().transpose() * estimate.linear();
+    const Eigen::Matrix3d truly_turned = first_truth->linear().transpose() * true_pose.linear();
+    worst = std::max(worst, degrees(eval::rotation_angle(turned.transpose() * truly_turned)));
   }
   return worst;
 }

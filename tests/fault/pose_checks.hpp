@@ -29,6 +29,10 @@ struct Jump {
 /// initialising pose are left out: its position means nothing yet (docs/pose-protocol.md).
 Jump largest_jump(const std::vector<pose::PoseMessage>& poses, const eval::Trajectory& truth);
 
+/// The largest angle between the scan poses' rotation since the first scan pose and the truth's
+/// over the same time (deg): how far the attitude, mostly the heading, drifted.
+double largest_attitude_drift_deg(const std::vector<pose::PoseMessage>& poses, const eval::Trajectory& truth);
+
 struct FlagCount {
   std::size_t poses = 0;
   std::size_t flagged = 0;
