@@ -174,15 +174,18 @@ void FeatureExtractor::gather_ring(const Scan& scan, const std::vector<std::uint
 void FeatureExtractor::process_ring(const Scan& scan, std::size_t ring_id, ScanFeatures& out) {
   const std::vector<std::uint32_t>& ring = rings_[ring_id];
   const int n = static_cast<int>(ring.size());
-  constexpr int kMaxHalf = 5;
   if (n < 2 * kMaxHalf + 1) return;
   excluded_.assign(static_cast<std::size_t>(n), 0);
   gather_ring(scan, ring);
-  const float* x = ring_x_.data();
-  const float* y = ring_y_.data();
-  const float* z = ring_z_.data();
-  const float* range = ring_range_.data();
+  mark_time_gaps(n);
+  exclude_occluded_and_parallel(n);
+  ring_curvatures_by_range(n);
+  // Per sector: the sharpest points become edges (spread out), the flattest ones planes.
+  const int sectors = std::max(1, params_.sectors_per_ring);
+  for (int s = 0; s < sectors; ++s) pick_sector(scan, ring_id, s * n / sectors, (s + 1) * n / sectors, out);
+}
 
+void FeatureExtractor::mark_time_gaps(int n) {
   // Missing returns leave gaps in time; a window across a gap mixes distant surfaces.
   // Consecutive firings of one beam are 55.6 us apart at 10 Hz; allow a few missing.
   // gaps_before_[k]: how many of the steps k' -> k' + 1 with k' < k are gaps, so that a window's
@@ -194,7 +197,14 @@ void FeatureExtractor::process_ring(const Scan& scan, std::size_t ring_id, ScanF
     const bool gap = ring_time_[static_cast<std::size_t>(k) + 1] - ring_time_[static_cast<std::size_t>(k)] > kMaxFiringGap;
     gaps_before_[static_cast<std::size_t>(k) + 1] = gaps_before_[static_cast<std::size_t>(k)] + (gap ? 1 : 0);
   }
+}
 
+bool FeatureExtractor::across_gap(int a, int b) const {
+  return gaps_before_[static_cast<std::size_t>(std::max(a, b))] != gaps_before_[static_cast<std::size_t>(std::min(a, b))];
+}
+
+void FeatureExtractor::exclude_occluded_and_parallel(int n) {
+  const float* range = ring_range_.data();
   // Occlusion: at a range jump, the far side's points are hidden behind the near object and
   // their apparent edge moves with the viewpoint, so they are unreliable features.
   // The jumps are found first, several positions at a time (without a branch), then the few
@@ -224,13 +234,18 @@ void FeatureExtractor::process_ring(const Scan& scan, std::size_t ring_id, ScanF
     const bool parallel = (std::abs(range[k - 1] - r) > 0.02F * r) & (std::abs(range[k + 1] - r) > 0.02F * r);
     excluded[k] = static_cast<std::uint8_t>(excluded[k] | static_cast<std::uint8_t>(parallel));
   }
+}
 
-  auto& ring_curvature = ring_curvature_;
-  ring_curvature.assign(static_cast<std::size_t>(n), std::numeric_limits<float>::quiet_NaN());
+void FeatureExtractor::ring_curvatures_by_range(int n) {
+  const float* x = ring_x_.data();
+  const float* y = ring_y_.data();
+  const float* z = ring_z_.data();
+  const float* range = ring_range_.data();
+  ring_curvature_.assign(static_cast<std::size_t>(n), std::numeric_limits<float>::quiet_NaN());
   // Runs of positions whose range gives the same neighbourhood: along a ring the range changes
   // smoothly, so the runs are long.
   auto half_at = [&](int k) { return curvature_neighbourhood_size(range[k], params_.neighbourhood) / 2; };
-  float* curvature = ring_curvature.data();
+  float* curvature = ring_curvature_.data();
   for (int begin = kMaxHalf; begin < n - kMaxHalf;) {
     const int half = half_at(begin);
     int end = begin + 1;
@@ -248,114 +263,122 @@ void FeatureExtractor::process_ring(const Scan& scan, std::size_t ring_id, ScanF
     }
     begin = end;
   }
+}
 
+Eigen::Vector3f FeatureExtractor::surface_end_step(int k, int n) const {
   // An edge whose range jumps beyond it on one side ends the surface on the other: its shift
   // towards that end, from the ring's previous return on the surface (no jump or missing return
   // between the two).
-  auto surface_end_step = [&](int k) -> Eigen::Vector3f {
-    int previous = -1;
-    if (k + 1 < n && k > 0 && jumps[k] && range[k] < range[k + 1] && !jumps[k - 1]) previous = k - 1;
-    if (k > 0 && k + 1 < n && jumps[k - 1] && range[k] < range[k - 1] && !jumps[k]) previous = k + 1;
-    if (previous < 0 || gaps_before_[static_cast<std::size_t>(std::max(k, previous))] !=
-                            gaps_before_[static_cast<std::size_t>(std::min(k, previous))]) {
-      return Eigen::Vector3f::Zero();
-    }
-    return surface_end_shift(Eigen::Vector3f(x[k], y[k], z[k]), Eigen::Vector3f(x[previous], y[previous], z[previous]),
-                             params_.surface_end_extrapolation);
-  };
+  const float* x = ring_x_.data();
+  const float* y = ring_y_.data();
+  const float* z = ring_z_.data();
+  const float* range = ring_range_.data();
+  const std::uint8_t* jumps = range_jumps_.data();
+  int previous = -1;
+  if (k + 1 < n && k > 0 && jumps[k] && range[k] < range[k + 1] && !jumps[k - 1]) previous = k - 1;
+  if (k > 0 && k + 1 < n && jumps[k - 1] && range[k] < range[k - 1] && !jumps[k]) previous = k + 1;
+  if (previous < 0 || across_gap(k, previous)) return Eigen::Vector3f::Zero();
+  return surface_end_shift(Eigen::Vector3f(x[k], y[k], z[k]), Eigen::Vector3f(x[previous], y[previous], z[previous]),
+                           params_.surface_end_extrapolation);
+}
 
+std::optional<Eigen::Vector3f> FeatureExtractor::post_run_shift(int k, int n) const {
   // An edge that ends a narrow run standing out before both of its neighbours (a post, a pole):
   // post_depth_m before the run's axis, along the horizontal ray, instead of where the return was.
   constexpr int kMaxRunReturns = 40;
   constexpr int kMinRunReturns = 3;
-  auto post_run_shift = [&](int k) -> std::optional<Eigen::Vector3f> {
-    // The run of returns around k without a range jump, k at one of its ends, both ends nearer
-    // than the returns beyond them.
-    int first = k;
-    while (first > 0 && k - first < kMaxRunReturns - 1 && !jumps[first - 1]) --first;
-    int last = k;
-    while (last + 1 < n && last - k < kMaxRunReturns - 1 && !jumps[last]) ++last;
-    const bool stands_out = first > 0 && jumps[first - 1] && range[first] < range[first - 1] && last + 1 < n &&
-                            jumps[last] && range[last] < range[last + 1];
-    if (!stands_out || (k != first && k != last) || last < first + kMinRunReturns - 1 ||
-        gaps_before_[static_cast<std::size_t>(last)] != gaps_before_[static_cast<std::size_t>(first)]) {
-      return std::nullopt;
-    }
-    const Eigen::Vector3f a(x[first], y[first], z[first]);
-    const Eigen::Vector3f b(x[last], y[last], z[last]);
-    if ((a - b).norm() > static_cast<float>(params_.post_max_width_m)) return std::nullopt;
-    const auto axis = narrow_run_axis(x, y, z, first, last);
-    if (!axis) return std::nullopt;
-    const Eigen::Vector3f along = Eigen::Vector3f(axis->x(), axis->y(), 0.0F).normalized();
-    return Eigen::Vector3f(*axis - static_cast<float>(params_.post_depth_m) * along - Eigen::Vector3f(x[k], y[k], z[k]));
-  };
+  const float* x = ring_x_.data();
+  const float* y = ring_y_.data();
+  const float* z = ring_z_.data();
+  const float* range = ring_range_.data();
+  const std::uint8_t* jumps = range_jumps_.data();
+  // The run of returns around k without a range jump, k at one of its ends, both ends nearer
+  // than the returns beyond them.
+  int first = k;
+  while (first > 0 && k - first < kMaxRunReturns - 1 && !jumps[first - 1]) --first;
+  int last = k;
+  while (last + 1 < n && last - k < kMaxRunReturns - 1 && !jumps[last]) ++last;
+  const bool stands_out = first > 0 && jumps[first - 1] && range[first] < range[first - 1] && last + 1 < n &&
+                          jumps[last] && range[last] < range[last + 1];
+  if (!stands_out || (k != first && k != last) || last < first + kMinRunReturns - 1 ||
+      gaps_before_[static_cast<std::size_t>(last)] != gaps_before_[static_cast<std::size_t>(first)]) {
+    return std::nullopt;
+  }
+  const Eigen::Vector3f a(x[first], y[first], z[first]);
+  const Eigen::Vector3f b(x[last], y[last], z[last]);
+  if ((a - b).norm() > static_cast<float>(params_.post_max_width_m)) return std::nullopt;
+  const auto axis = narrow_run_axis(x, y, z, first, last);
+  if (!axis) return std::nullopt;
+  const Eigen::Vector3f along = Eigen::Vector3f(axis->x(), axis->y(), 0.0F).normalized();
+  return Eigen::Vector3f(*axis - static_cast<float>(params_.post_depth_m) * along - Eigen::Vector3f(x[k], y[k], z[k]));
+}
 
+bool FeatureExtractor::crosses_border(const Scan& scan, std::size_t ring_id, int k, int n) const {
   // An edge where the ring runs off a surface across a horizontal border: beyond it the ring
   // reaches farther, and the next ring up or down carries the surface on past it.
   constexpr int kCrossingBaseline = 6;  // returns back along the run for the surface's direction
-  auto crosses_border = [&](int k) {
-    for (const int side : {1, -1}) {
-      // The surface's last return: k or one of the next two towards `side`, where the ring then
-      // reaches farther (a jump, or a surface behind within the jump's threshold).
-      int end = -1;
-      for (int j = k; j != k + 3 * side && j + side >= 0 && j + side < n; j += side) {
-        if (range[j + side] > range[j] * 1.02F) {
-          end = j;
-          break;
-        }
-      }
-      if (end < 0) continue;
-      int inner = end;
-      while (inner - side >= 0 && inner - side < n && std::abs(inner - end) < kCrossingBaseline &&
-             !jumps[std::min(inner, inner - side)]) {
-        inner -= side;
-      }
-      if (inner == end) continue;
-      const Eigen::Vector2f last(x[end], y[end]);
-      const Eigen::Vector2f before(x[inner], y[inner]);
-      const float t = ring_time_[static_cast<std::size_t>(end)];
-      if (surface_continues(scan, ring_id, 1, last, before, t, side) ||
-          surface_continues(scan, ring_id, -1, last, before, t, side)) {
-        return true;
+  const float* x = ring_x_.data();
+  const float* y = ring_y_.data();
+  const float* range = ring_range_.data();
+  const std::uint8_t* jumps = range_jumps_.data();
+  for (const int side : {1, -1}) {
+    // The surface's last return: k or one of the next two towards `side`, where the ring then
+    // reaches farther (a jump, or a surface behind within the jump's threshold).
+    int end = -1;
+    for (int j = k; j != k + 3 * side && j + side >= 0 && j + side < n; j += side) {
+      if (range[j + side] > range[j] * 1.02F) {
+        end = j;
+        break;
       }
     }
-    return false;
-  };
+    if (end < 0) continue;
+    int inner = end;
+    while (inner - side >= 0 && inner - side < n && std::abs(inner - end) < kCrossingBaseline &&
+           !jumps[std::min(inner, inner - side)]) {
+      inner -= side;
+    }
+    if (inner == end) continue;
+    const Eigen::Vector2f last(x[end], y[end]);
+    const Eigen::Vector2f before(x[inner], y[inner]);
+    const float t = ring_time_[static_cast<std::size_t>(end)];
+    if (surface_continues(scan, ring_id, 1, last, before, t, side) ||
+        surface_continues(scan, ring_id, -1, last, before, t, side)) {
+      return true;
+    }
+  }
+  return false;
+}
 
-  // Per sector: the sharpest points become edges (spread out), the flattest ones planes.
-  const int sectors = std::max(1, params_.sectors_per_ring);
-  for (int s = 0; s < sectors; ++s) {
-    const int begin = s * n / sectors;
-    const int end = (s + 1) * n / sectors;
-    order_.clear();
-    for (int k = begin; k < end; ++k) {
-      const float c = ring_curvature[static_cast<std::size_t>(k)];
-      if (!std::isnan(c) && !excluded_[static_cast<std::size_t>(k)]) order_.push_back({c, static_cast<std::uint32_t>(k)});
+void FeatureExtractor::pick_sector(const Scan& scan, std::size_t ring_id, int begin, int end, ScanFeatures& out) {
+  const std::vector<std::uint32_t>& ring = rings_[ring_id];
+  const int n = static_cast<int>(ring.size());
+  order_.clear();
+  for (int k = begin; k < end; ++k) {
+    const float c = ring_curvature_[static_cast<std::size_t>(k)];
+    if (!std::isnan(c) && !excluded_[static_cast<std::size_t>(k)]) order_.push_back({c, static_cast<std::uint32_t>(k)});
+  }
+  std::sort(order_.begin(), order_.end(), [](const Candidate& a, const Candidate& b) { return a.curvature > b.curvature; });
+  int picked = 0;
+  for (const Candidate& candidate : order_) {
+    if (picked >= params_.max_edges_per_sector) break;
+    if (candidate.curvature <= static_cast<float>(params_.edge_curvature)) break;
+    const std::uint32_t k = candidate.position;
+    if (excluded_[k]) continue;
+    if (params_.crossing_edge_tolerance_m <= 0.0 || !crosses_border(scan, ring_id, static_cast<int>(k), n)) {
+      out.edges.push_back(ring[k]);
+      const auto on_post = params_.post_max_width_m > 0.0 ? post_run_shift(static_cast<int>(k), n) : std::nullopt;
+      out.edge_shifts.push_back(on_post ? *on_post : surface_end_step(static_cast<int>(k), n));
+      ++picked;
     }
-    std::sort(order_.begin(), order_.end(),
-              [](const Candidate& a, const Candidate& b) { return a.curvature > b.curvature; });
-    int picked = 0;
-    for (const Candidate& candidate : order_) {
-      if (picked >= params_.max_edges_per_sector) break;
-      if (candidate.curvature <= static_cast<float>(params_.edge_curvature)) break;
-      const std::uint32_t k = candidate.position;
-      if (excluded_[k]) continue;
-      if (params_.crossing_edge_tolerance_m <= 0.0 || !crosses_border(static_cast<int>(k))) {
-        out.edges.push_back(ring[k]);
-        const auto on_post = params_.post_max_width_m > 0.0 ? post_run_shift(static_cast<int>(k)) : std::nullopt;
-        out.edge_shifts.push_back(on_post ? *on_post : surface_end_step(static_cast<int>(k)));
-        ++picked;
-      }
-      // Neighbours of an edge would duplicate it (of a dropped one, stand in for it).
-      const int lo = std::max(0, static_cast<int>(k) - kMaxHalf);
-      const int hi = std::min(n - 1, static_cast<int>(k) + kMaxHalf);
-      for (int m = lo; m <= hi; ++m) excluded_[static_cast<std::size_t>(m)] = 1;
-    }
-    for (const Candidate& candidate : order_) {
-      if (candidate.curvature < static_cast<float>(params_.plane_curvature) && !excluded_[candidate.position]) {
-        out.planes.push_back(ring[candidate.position]);
-        out.plane_curvatures.push_back(candidate.curvature);
-      }
+    // Neighbours of an edge would duplicate it (of a dropped one, stand in for it).
+    const int lo = std::max(0, static_cast<int>(k) - kMaxHalf);
+    const int hi = std::min(n - 1, static_cast<int>(k) + kMaxHalf);
+    for (int m = lo; m <= hi; ++m) excluded_[static_cast<std::size_t>(m)] = 1;
+  }
+  for (const Candidate& candidate : order_) {
+    if (candidate.curvature < static_cast<float>(params_.plane_curvature) && !excluded_[candidate.position]) {
+      out.planes.push_back(ring[candidate.position]);
+      out.plane_curvatures.push_back(candidate.curvature);
     }
   }
 }

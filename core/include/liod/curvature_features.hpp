@@ -107,7 +107,25 @@ class FeatureExtractor {
   void extract(const Scan& scan, ScanFeatures& out);
 
  private:
+  /// The widest curvature neighbourhood's half (10 returns: the nearest range band).
+  static constexpr int kMaxHalf = 5;
+  // One ring, in steps: its returns gathered, the gaps in its firing marked, occluded and
+  // grazing returns excluded, the curvatures computed, then each sector's features picked.
   void process_ring(const Scan& scan, std::size_t ring_id, ScanFeatures& out);
+  void mark_time_gaps(int n);
+  /// Whether a missing return lies between ring positions a and b.
+  bool across_gap(int a, int b) const;
+  void exclude_occluded_and_parallel(int n);
+  void ring_curvatures_by_range(int n);
+  void pick_sector(const Scan& scan, std::size_t ring_id, int begin, int end, ScanFeatures& out);
+  /// The shift of the edge at ring position k towards the end of its surface (surface_end_shift),
+  /// or zero when it ends none.
+  Eigen::Vector3f surface_end_step(int k, int n) const;
+  /// The shift of the edge at k onto its narrow run's axis, post_depth_m before it, if k ends a
+  /// run standing out before both of its neighbours (a post, a pole).
+  std::optional<Eigen::Vector3f> post_run_shift(int k, int n) const;
+  /// Whether the edge at k is where the ring runs off a surface across a horizontal border.
+  bool crosses_border(const Scan& scan, std::size_t ring_id, int k, int n) const;
   /// Whether ring ring_id + step (step = -1, +1) carries the surface of the horizontal line
   /// through `end` and `inner` (the ring's last return on it, fired at end_time, and one before)
   /// on beyond `end`: two to four firings later (side +1) or earlier (side -1).
