@@ -9,12 +9,13 @@
 #include <string>
 #include <vector>
 
+#include "liod/deskew.hpp"           // DeskewMode
+#include "liod/keyframe_window.hpp"  // KeyframeGating
+
 namespace liod {
 
 enum class LidarModel { kHelios5515, kHelios16P };
-enum class DeskewMode { kImu, kConstantVelocity, kNone };
 enum class CurvatureMode { kAdaptive, kFixed };
-enum class KeyframeGating { kHausdorff, kDistanceAngle };
 /// How an edge point's distance to its map line is measured: along the LiDAR ray (its range, which
 /// the silhouette of a post or a corner does not shift with the viewpoint) or the shortest way (LOAM).
 enum class EdgeResidual { kAlongRay, kPointToLine };

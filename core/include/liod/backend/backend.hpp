@@ -19,7 +19,7 @@
 #include "liod/backend/pose_graph.hpp"
 #include "liod/config.hpp"
 #include "liod/imu_preintegration.hpp"
-#include "liod/lidar_inertial_odometry.hpp"
+#include "liod/keyframe.hpp"
 
 namespace liod {
 
