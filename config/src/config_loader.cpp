@@ -1,219 +1,25 @@
-// The one place where configuration is parsed and validated. Every key is declared once in
-// declare_schema() with its type and admissible values; the loader rejects anything else.
+// The one place where configuration is parsed and validated. Every key is declared once, in the
+// section of the library that owns it, with its type and admissible values; the loader rejects
+// anything else.
 
-#include <yaml-cpp/yaml.h>
-
-#include <cmath>
-#include <filesystem>
 #include <fstream>
-#include <functional>
 #include <limits>
-#include <map>
 #include <sstream>
 
 #include "liod/config.hpp"
-#include "liod/local_map.hpp"
+#include "liod/map_limits.hpp"
+#include "schema.hpp"
 
 namespace liod {
 namespace {
 
-struct Source {
-  std::string file;
-  std::string key;
-  const YAML::Node& node;
-};
+using config_schema::fail;
+using config_schema::Schema;
+using config_schema::Setter;
+using config_schema::Source;
 
-[[noreturn]] void fail(const Source& src, const std::string& what) {
-  std::string value;
-  try {
-    if (src.node.IsScalar()) {
-      value = src.node.Scalar();
-    } else {
-      std::ostringstream out;
-      out << YAML::Dump(src.node);
-      value = out.str();
-    }
-  } catch (const std::exception&) {
-    value = "?";
-  }
-  std::ostringstream msg;
-  msg << src.file;
-  if (src.node.Mark().line >= 0) msg << ':' << src.node.Mark().line + 1;
-  msg << ": key '" << src.key << "' = '" << value << "': " << what;
-  throw ConfigError(msg.str());
-}
-
-using Setter = std::function<void(const Source&)>;
-
-class Schema {
- public:
-  void real(const std::string& key, double* target, double lo, double hi) {
-    setters_[key] = [=](const Source& src) {
-      const double v = scalar<double>(src, "a number");
-      if (!std::isfinite(v) || v < lo || v > hi) {
-        fail(src, "must be a number in [" + fmt(lo) + ", " + fmt(hi) + "]");
-      }
-      *target = v;
-    };
-  }
-  void integer(const std::string& key, int* target, int lo, int hi) {
-    setters_[key] = [=](const Source& src) {
-      const int v = scalar<int>(src, "an integer");
-      if (v < lo || v > hi) fail(src, "must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-      *target = v;
-    };
-  }
-  void boolean(const std::string& key, bool* target) {
-    setters_[key] = [=](const Source& src) { *target = scalar<bool>(src, "true or false"); };
-  }
-  void text(const std::string& key, std::string* target) {
-    setters_[key] = [=](const Source& src) { *target = scalar<std::string>(src, "a string"); };
-  }
-  template <typename Enum>
-  void choice(const std::string& key, Enum* target, std::map<std::string, Enum> options) {
-    setters_[key] = [=](const Source& src) {
-      const auto v = scalar<std::string>(src, "a string");
-      const auto it = options.find(v);
-      if (it == options.end()) {
-        std::string allowed;
-        for (const auto& [name, value] : options) allowed += (allowed.empty() ? "" : ", ") + name;
-        fail(src, "must be one of: " + allowed);
-      }
-      *target = it->second;
-    };
-  }
-  void vector3(const std::string& key, Eigen::Vector3d* target, double bound) {
-    setters_[key] = [=](const Source& src) {
-      const auto v = sequence(src, 3);
-      for (double x : v) {
-        if (std::abs(x) > bound) fail(src, "elements must lie in [-" + fmt(bound) + ", " + fmt(bound) + "]");
-      }
-      *target = Eigen::Vector3d(v[0], v[1], v[2]);
-    };
-  }
-  void quaternion(const std::string& key, Eigen::Quaterniond* target) {
-    setters_[key] = [=](const Source& src) {
-      const auto v = sequence(src, 4);
-      Eigen::Quaterniond q(v[3], v[0], v[1], v[2]);  // the file lists x, y, z, w
-      if (std::abs(q.norm() - 1.0) > 1e-3) fail(src, "must be a unit quaternion [qx, qy, qz, qw]");
-      *target = q.normalized();
-    };
-  }
-
-  /// A list of CAN signal mappings (drivers.imu.can_signals): each entry a mapping with
-  /// quantity, id, [id_mask], byte, [bytes], [endian], [signed], [scale], [offset].
-  void can_signals(const std::string& key, std::vector<CanSignalConfig>* target) {
-    setters_[key] = [=](const Source& src) {
-      if (!src.node.IsSequence()) fail(src, "must be a list of signal mappings");
-      std::vector<CanSignalConfig> out;
-      for (std::size_t i = 0; i < src.node.size(); ++i) {
-        const YAML::Node& e = src.node[i];
-        const std::string k = key + "[" + std::to_string(i) + "]";
-        if (!e.IsMap()) fail(Source{src.file, k, e}, "must be a mapping");
-        CanSignalConfig sig;
-        bool have_id = false;
-        bool have_quantity = false;
-        for (const auto& f : e) {
-          if (!f.first.IsScalar()) fail(Source{src.file, k, f.first}, "keys must be plain names");
-          const std::string name = f.first.as<std::string>();
-          const Source fs{src.file, k + "." + name, f.second};
-          auto u32 = [&](std::uint32_t limit) {
-            const long long v = scalar<long long>(fs, "an integer");
-            if (v < 0 || v > static_cast<long long>(limit)) fail(fs, "must be an integer in [0, " + std::to_string(limit) + "]");
-            return static_cast<std::uint32_t>(v);
-          };
-          if (name == "quantity") {
-            sig.quantity = scalar<std::string>(fs, "a string");
-            static const char* kQ[] = {"gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"};
-            bool ok = false;
-            for (const char* q : kQ) ok = ok || sig.quantity == q;
-            if (!ok) fail(fs, "must be one of gyro_x, gyro_y, gyro_z, accel_x, accel_y, accel_z");
-            have_quantity = true;
-          } else if (name == "id") {
-            sig.can_id = u32(0x1FFFFFFF);
-            have_id = true;
-          } else if (name == "id_mask") {
-            sig.id_mask = u32(0x1FFFFFFF);
-          } else if (name == "byte") {
-            sig.byte_offset = static_cast<int>(u32(63));
-          } else if (name == "bytes") {
-            sig.length_bytes = static_cast<int>(u32(4));
-            if (sig.length_bytes != 1 && sig.length_bytes != 2 && sig.length_bytes != 4) fail(fs, "must be 1, 2 or 4");
-          } else if (name == "endian") {
-            const auto v = scalar<std::string>(fs, "a string");
-            if (v != "little" && v != "big") fail(fs, "must be little or big");
-            sig.big_endian = v == "big";
-          } else if (name == "signed") {
-            sig.is_signed = scalar<bool>(fs, "true or false");
-          } else if (name == "scale" || name == "offset") {
-            const double v = scalar<double>(fs, "a number");
-            if (!std::isfinite(v)) fail(fs, "must be finite");
-            (name == "scale" ? sig.scale : sig.offset) = v;
-          } else {
-            fail(fs, "unknown key (quantity, id, id_mask, byte, bytes, endian, signed, scale, offset)");
-          }
-        }
-        if (!have_id || !have_quantity) fail(Source{src.file, k, e}, "needs at least 'quantity' and 'id'");
-        out.push_back(sig);
-      }
-      *target = out;
-    };
-  }
-
-  const Setter* find(const std::string& key) const {
-    const auto it = setters_.find(key);
-    return it == setters_.end() ? nullptr : &it->second;
-  }
-
- private:
-  static std::string fmt(double v) {
-    std::ostringstream out;
-    out << v;
-    return out.str();
-  }
-  template <typename T>
-  static T scalar(const Source& src, const char* expected) {
-    if (!src.node.IsScalar()) fail(src, std::string("must be ") + expected);
-    try {
-      return src.node.as<T>();
-    } catch (const YAML::Exception&) {
-      fail(src, std::string("must be ") + expected);
-    }
-  }
-  static std::vector<double> sequence(const Source& src, std::size_t n) {
-    if (!src.node.IsSequence() || src.node.size() != n) {
-      fail(src, "must be a list of " + std::to_string(n) + " numbers");
-    }
-    std::vector<double> out;
-    for (const auto& element : src.node) {
-      try {
-        out.push_back(element.as<double>());
-      } catch (const YAML::Exception&) {
-        fail(src, "must be a list of " + std::to_string(n) + " numbers");
-      }
-      if (!std::isfinite(out.back())) fail(src, "must hold finite numbers");
-    }
-    return out;
-  }
-
-  std::map<std::string, Setter> setters_;
-};
-
-Schema declare_schema(Config& c) {
-  Schema s;
-  constexpr double kInf = std::numeric_limits<double>::max();
-  s.text("log.level", &c.log.level);
-
-  s.choice("lidar.model", &c.lidar.model,
-           {{"helios5515", LidarModel::kHelios5515}, {"helios16p", LidarModel::kHelios16P}});
-  s.integer("lidar.msop_port", &c.lidar.msop_port, 1, 65535);
-  s.integer("lidar.difop_port", &c.lidar.difop_port, 1, 65535);
-  s.text("lidar.angles_csv", &c.lidar.angles_csv);
-  s.real("lidar.min_range_m", &c.lidar.min_range_m, 0.0, 10.0);
-  s.real("lidar.max_range_m", &c.lidar.max_range_m, 1.0, 500.0);
-  s.real("lidar.split_azimuth_deg", &c.lidar.split_azimuth_deg, 0.0, 359.99);
-  s.integer("lidar.packets_before_difop", &c.lidar.packets_before_difop, 0, 65536);
-
+// The algorithm's keys (core/algorithm_config.hpp): the IMU's noise, the extrinsics, the front end.
+void declare_front_end(Schema& s, FrontEndConfig& c) {
   s.real("imu.rate_hz", &c.imu.rate_hz, 10.0, 10000.0);
   s.real("imu.gyro_noise_density", &c.imu.gyro_noise_density, 1e-7, 1.0);
   s.real("imu.accel_noise_density", &c.imu.accel_noise_density, 1e-6, 10.0);
@@ -250,23 +56,25 @@ Schema declare_schema(Config& c) {
   s.real("odometry.plane_voxel_m", &o.plane_voxel_m, 0.01, 5.0);
   s.real("odometry.edge_voxel_m", &o.edge_voxel_m, 0.01, 5.0);
   s.real("odometry.map_voxel_m", &o.map_voxel_m, 0.1, 10.0);
-  s.integer("odometry.map_points_per_voxel", &o.map_points_per_voxel, 1, LocalMap::kMaxPointsPerVoxel);
+  s.integer("odometry.map_points_per_voxel", &o.map_points_per_voxel, 1, kMapMaxPointsPerVoxel);
   s.real("odometry.map_min_point_spacing_m", &o.map_min_point_spacing_m, 0.0, 5.0);
+}
+
+// The front end's registration, keyframes, holds and priors.
+void declare_registration(Schema& s, OdometryConfig& o) {
+  constexpr double kInf = std::numeric_limits<double>::max();
   s.integer("odometry.max_iterations", &o.max_iterations, 1, 50);
   s.integer("odometry.forced_searches", &o.forced_searches, 1, 50);
   s.real("odometry.lidar_noise_m", &o.lidar_noise_m, 1e-4, 10.0);
   s.real("odometry.max_correspondence_m", &o.max_correspondence_m, 0.05, 20.0);
-  s.integer("odometry.correspondence_neighbours", &o.correspondence_neighbours, 3, LocalMap::kMaxNeighbours);
+  s.integer("odometry.correspondence_neighbours", &o.correspondence_neighbours, 3, kMapMaxNeighbours);
   s.real("odometry.correspondence_gate_m", &o.correspondence_gate_m, 0.05, 20.0);
   s.real("odometry.plane_thickness_m", &o.plane_thickness_m, 1e-4, 10.0);
   s.boolean("odometry.fit_uncertainty", &o.fit_uncertainty);
   s.boolean("odometry.post_edges", &o.post_edges);
-  s.real("odometry.post_depth_m", &o.post_depth_m, 0.0, 1.0);
-  s.real("odometry.surface_end_extrapolation", &o.surface_end_extrapolation, 0.0, 1.0);
   s.real("odometry.post_max_width_m", &o.post_max_width_m, 0.0, 2.0);
   s.real("odometry.crossing_edge_tolerance_m", &o.crossing_edge_tolerance_m, 0.0, 1.0);
   s.boolean("odometry.move_off_planes_across", &o.move_off_planes_across);
-  s.real("odometry.move_off_distance_m", &o.move_off_distance_m, 0.0, 1000.0);
   s.boolean("odometry.beam_calibration", &o.beam_calibration);
   s.boolean("odometry.beam_range_calibration", &o.beam_range_calibration);
   s.real("odometry.keyframe_distance_m", &o.keyframe_distance_m, 0.0, 100.0);
@@ -276,18 +84,14 @@ Schema declare_schema(Config& c) {
   s.integer("odometry.window_keyframes", &o.window_keyframes, 1, 1000);
   s.real("odometry.degeneracy_eigenvalue", &o.degeneracy_eigenvalue, 0.0, kInf);
   s.real("odometry.hold_release_yaw_rate_deg_s", &o.hold_release_yaw_rate_deg_s, 0.0, 360.0);
-  s.real("odometry.hold_release_eigenvalue_factor", &o.hold_release_eigenvalue_factor, 1.0, 100.0);
-  s.real("odometry.held_bias_trim_window_s", &o.held_bias_trim_window_s, 0.0, 3600.0);
-  s.real("odometry.held_bias_trim_gain", &o.held_bias_trim_gain, 0.0, 1.0);
-  s.real("odometry.max_prediction_nis", &o.max_prediction_nis, 1.0, kInf);
   s.boolean("odometry.degeneracy_projection", &o.degeneracy_projection);
   s.real("odometry.init_gyro_bias_std", &o.init_gyro_bias_std, 1e-6, 1.0);
-  s.real("odometry.standstill_gyro_bias_std", &o.standstill_gyro_bias_std, 1e-6, 1.0);
   s.real("odometry.init_accel_bias_std", &o.init_accel_bias_std, 1e-6, 10.0);
   s.real("odometry.init_velocity_std", &o.init_velocity_std, 1e-3, 100.0);
   s.real("odometry.init_tilt_std_deg", &o.init_tilt_std_deg, 0.01, 45.0);
+}
 
-  auto& b = c.backend;
+void declare_backend(Schema& s, BackendConfig& b) {
   s.boolean("backend.enabled", &b.enabled);
   s.real("backend.loop_radius_m", &b.loop_radius_m, 0.5, 1000.0);
   s.real("backend.loop_time_gap_s", &b.loop_time_gap_s, 0.0, 86400.0);
@@ -316,8 +120,19 @@ Schema declare_schema(Config& c) {
   s.real("backend.map_voxel_m", &b.map_voxel_m, 0.01, 10.0);
   s.boolean("backend.persist", &b.persist);
   s.integer("backend.memory_keyframes", &b.memory_keyframes, 0, 1000000);
-  s.text("output.pose_socket", &c.output.pose_socket);
-  s.text("output.state_dir", &c.output.state_dir);
+}
+
+// The drivers' keys (drivers/sensor_config.hpp).
+void declare_sensors(Schema& s, SensorConfig& c) {
+  s.choice("lidar.model", &c.lidar.model,
+           {{"helios5515", LidarModel::kHelios5515}, {"helios16p", LidarModel::kHelios16P}});
+  s.integer("lidar.msop_port", &c.lidar.msop_port, 1, 65535);
+  s.integer("lidar.difop_port", &c.lidar.difop_port, 1, 65535);
+  s.text("lidar.angles_csv", &c.lidar.angles_csv);
+  s.real("lidar.min_range_m", &c.lidar.min_range_m, 0.0, 10.0);
+  s.real("lidar.max_range_m", &c.lidar.max_range_m, 1.0, 500.0);
+  s.real("lidar.split_azimuth_deg", &c.lidar.split_azimuth_deg, 0.0, 359.99);
+  s.integer("lidar.packets_before_difop", &c.lidar.packets_before_difop, 0, 65536);
 
   auto& dl = c.drivers.lidar;
   s.text("drivers.lidar.bind_address", &dl.bind_address);
@@ -350,6 +165,15 @@ Schema declare_schema(Config& c) {
   s.text("time.pps_chip", &c.time.pps_chip);
   s.integer("time.pps_line", &c.time.pps_line, 0, 1023);
 
+}
+
+// The daemon's keys (daemon/daemon_config.hpp).
+void declare_daemon(Schema& s, DaemonConfig& c) {
+  s.text("log.level", &c.log.level);
+  s.text("output.pose_socket", &c.output.pose_socket);
+  s.text("output.state_dir", &c.output.state_dir);
+
+
   for (auto [name, t] : {std::pair{"lidar", &c.threads.lidar}, std::pair{"imu", &c.threads.imu},
                          std::pair{"odometry", &c.threads.odometry}, std::pair{"publisher", &c.threads.publisher}}) {
     s.integer(std::string("threads.") + name + ".priority", &t->priority, 0, 99);
@@ -361,6 +185,7 @@ Schema declare_schema(Config& c) {
   s.integer("threads.pose_ring", &c.threads.pose_ring, 16, 1 << 20);
   s.integer("threads.keyframe_ring", &c.threads.keyframe_ring, 2, 65536);
 
+
   s.text("pose_socket.mode", &c.pose_socket.mode);
   s.integer("pose_socket.max_clients", &c.pose_socket.max_clients, 1, 4096);
   s.integer("pose_socket.client_buffer_bytes", &c.pose_socket.client_buffer_bytes, 4096, 1 << 28);
@@ -369,6 +194,15 @@ Schema declare_schema(Config& c) {
   s.boolean("pose_socket.imu_rate", &c.pose_socket.imu_rate);
   s.real("pose_socket.health_interval_s", &c.pose_socket.health_interval_s, 0.05, 3600.0);
   s.real("pose_socket.health_log_interval_s", &c.pose_socket.health_log_interval_s, 0.0, 86400.0);
+}
+
+Schema declare_schema(Config& c) {
+  Schema s;
+  declare_front_end(s, c);
+  declare_registration(s, c.odometry);
+  declare_backend(s, c.backend);
+  declare_sensors(s, c);
+  declare_daemon(s, c);
   return s;
 }
 
@@ -388,7 +222,7 @@ void apply(const Schema& schema, const YAML::Node& node, const std::string& pref
     } else if (value.IsMap()) {
       apply(schema, value, key, file);
     } else {
-      fail(Source{file, key, value}, "unknown key (see config/liod.yaml for the keys liod knows)");
+      fail(Source{file, key, value}, "unknown key (config/liod.yaml and config/examples/advanced.yaml list the keys liod knows)");
     }
   }
 }

@@ -44,14 +44,11 @@ void ring_curvatures(const float* __restrict x, const float* __restrict y, const
 }  // namespace
 
 Eigen::Vector3f surface_end_shift(const Eigen::Vector3f& end, const Eigen::Vector3f& previous, double extrapolation) {
-  // Below these the step is the face-on spacing and its range noise (1.8 cm a return on the
-  // simulated Helios): moving a post's silhouette point by half of it adds noise, not accuracy
-  // (highway seeds 1-4, every end moved: 3.37 -> 5.02 m ATE). At 3x (grazing below 20 deg) a
-  // rolling start beside rails came out 3.7 % short; at 5x (below 11.5 deg; the extractor drops
-  // surface ends met under 10 deg as parallel to the beam) it is 0.5 %, and the portals' corners,
-  // the steepest steps, are still moved. Which ends between 3x and 5x hurt is not known: moving only
-  // those the adjacent ring also ends at (real vertical ends, not a rail band's crossings) failed
-  // that start as well (docs/odometry.md, 2026-12-05, third and fourth sessions).
+  // Below these the step is the face-on spacing and its range noise (a couple of centimetres a
+  // return): moving a post's silhouette point by half of it adds noise, not accuracy. 5x the
+  // face-on step is grazing below 11.5 deg (the extractor drops surface ends met under 10 deg as
+  // parallel to the beam): only steep steps, such as a wall's end seen along it, are moved
+  // (docs/design.md, "Surface ends").
   constexpr float kMinGrazingStepRatio = 5.0F;
   constexpr float kMinExtrapolatedStepM = 0.05F;
   const float end_range = end.norm();

@@ -30,7 +30,7 @@ constexpr std::size_t kFlattestQueriesFromKeyframe = 3;
 
 double velocity_std(const StateCovariance& p) { return std::sqrt(p.block<3, 3>(6, 6).diagonal().maxCoeff()); }
 
-StartUpConfig start_up_config(const Config& config) {
+StartUpConfig start_up_config(const FrontEndConfig& config) {
   const OdometryConfig& o = config.odometry;
   StartUpConfig s;
   s.forward_axis = o.forward_axis;
@@ -46,7 +46,6 @@ StartUpConfig start_up_config(const Config& config) {
   s.velocity_std = o.init_velocity_std;
   s.gyro_bias_std = o.init_gyro_bias_std;
   s.accel_bias_std = o.init_accel_bias_std;
-  s.standstill_gyro_bias_std = o.standstill_gyro_bias_std;
   return s;
 }
 
@@ -55,24 +54,19 @@ BiasHoldConfig bias_hold_config(const OdometryConfig& o) {
   h.forward_axis = o.forward_axis;
   h.up_axis = o.up_axis;
   h.degeneracy_eigenvalue = o.degeneracy_eigenvalue;
-  h.release_eigenvalue_factor = o.hold_release_eigenvalue_factor;
   h.release_yaw_rate_deg_s = o.hold_release_yaw_rate_deg_s;
-  h.max_prediction_nis = o.max_prediction_nis;
-  h.trim_window_s = o.held_bias_trim_window_s;
-  h.trim_gain = o.held_bias_trim_gain;
   return h;
 }
 
 MoveOffConfig move_off_config(const OdometryConfig& o) {
   MoveOffConfig m;
   m.enabled = o.move_off_planes_across;
-  m.distance_m = o.move_off_distance_m;
   m.forward_axis = o.forward_axis;
   m.up_axis = o.up_axis;
   return m;
 }
 
-UpdateParams update_params(const Config& config) {
+UpdateParams update_params(const FrontEndConfig& config) {
   const OdometryConfig& o = config.odometry;
   UpdateParams u;
   u.max_iterations = o.max_iterations;
@@ -84,10 +78,7 @@ UpdateParams update_params(const Config& config) {
   u.correspondence.fit_uncertainty = o.fit_uncertainty;
   if (o.edge_residual == EdgeResidual::kAlongRay) {
     u.edge_viewpoint_body = config.extrinsics.lidar_to_imu_translation;
-    if (o.post_edges) {
-      u.posts = PostParams{};
-      u.posts->depth_m = o.post_depth_m;
-    }
+    if (o.post_edges) u.posts = PostParams{};
   }
   u.degeneracy_eigenvalue = o.degeneracy_eigenvalue;
   u.project_degenerate = o.degeneracy_projection;
@@ -116,7 +107,7 @@ KeyframeWindowConfig keyframe_window_config(const OdometryConfig& o, const Updat
 
 }  // namespace
 
-FeatureParams LidarInertialOdometry::feature_params(const Config& config) {
+FeatureParams LidarInertialOdometry::feature_params(const FrontEndConfig& config) {
   const OdometryConfig& o = config.odometry;
   const ExtrinsicsConfig& extrinsics = config.extrinsics;
   FeatureParams p;
@@ -129,9 +120,7 @@ FeatureParams LidarInertialOdometry::feature_params(const Config& config) {
   p.plane_curvature = o.plane_curvature;
   p.sectors_per_ring = o.sectors_per_ring;
   p.max_edges_per_sector = o.max_edges_per_sector;
-  p.surface_end_extrapolation = o.surface_end_extrapolation;
   p.post_max_width_m = o.post_edges ? o.post_max_width_m : 0.0;
-  p.post_depth_m = o.post_depth_m;
   p.crossing_edge_tolerance_m = o.crossing_edge_tolerance_m;
   if ((o.crop_box_min_m.array() < o.crop_box_max_m.array()).all()) {
     CropBox box;
@@ -144,7 +133,7 @@ FeatureParams LidarInertialOdometry::feature_params(const Config& config) {
   return p;
 }
 
-LidarInertialOdometry::LidarInertialOdometry(const Config& config)
+LidarInertialOdometry::LidarInertialOdometry(const FrontEndConfig& config)
     : config_(config),
       extrinsics_(config.extrinsics),
       lidar_to_imu_{config.extrinsics.lidar_to_imu_rotation, config.extrinsics.lidar_to_imu_translation},

@@ -159,10 +159,7 @@ std::optional<LinearResidual> line_correspondence(LocalMap::NeighbourSearch& map
   if (viewpoint != nullptr) {
     // Along the ray (its part across the line): where an edge point lies across the ray depends on
     // where the beam grazed the post or corner, which moves with the viewpoint by up to the
-    // object's width and one azimuth step; its range hardly. At the true poses of the highway drive
-    // (seed 1, map from true poses) the point-to-line residuals of its roadside posts asked for a
-    // step of -6.3 cm along the track on average, the silhouettes seen from the keyframes behind;
-    // along the ray -3.5 cm.
+    // object's width and one azimuth step; its range hardly (docs/design.md, "Edges along the ray").
     const auto along_ray = across_ray(across, query, *viewpoint);
     if (!along_ray) return std::nullopt;  // a ray along the line: no range to it
     normal = *along_ray;

@@ -54,7 +54,7 @@ Eigen::Isometry3d route(double s) {
 
 TEST(Backend, ClosesTheLoopAroundABlockAndRemovesTheDrift) {
   const test::World world = city_block();
-  Config config;
+  AlgorithmConfig config;
   config.backend.enabled = true;
   Backend backend(config);
   std::vector<Eigen::Isometry3d> truth;
@@ -143,7 +143,7 @@ TEST(Backend, ClosesTheLoopAroundABlockAndRemovesTheDrift) {
 
 TEST(Backend, NoLoopWithoutARevisit) {
   const test::World world = city_block();
-  Config config;
+  AlgorithmConfig config;
   config.backend.enabled = true;
   Backend backend(config);
   for (int i = 0; i < 100; ++i) {  // 200 m: most of a lap, never back at the start
@@ -159,7 +159,7 @@ TEST(Backend, NoLoopWithoutARevisit) {
 // optimised poses, bit for bit, as with every cloud in memory; so does the global map.
 TEST(Backend, SameLoopsAndPosesWithMostCloudsOnDisk) {
   const test::World world = city_block();
-  Config config;
+  AlgorithmConfig config;
   config.backend.enabled = true;
   config.backend.memory_keyframes = 30;
   const std::filesystem::path dir =

@@ -15,8 +15,8 @@ using namespace liod;
 using liod::test::World;
 constexpr double kDeg = M_PI / 180.0;
 
-Config test_config() {
-  Config c;
+AlgorithmConfig test_config() {
+  AlgorithmConfig c;
   c.backend.enabled = true;
   return c;
 }
@@ -147,7 +147,7 @@ TEST(LoopCheck, ParallelStreetIsDissimilar) {
   // On street B, 9 m north of the candidate: within the 10 m loop radius.
   const auto truth = liod::test::pose_xyz_yaw(0.0, 9.0, 0.0, 0.0);
   const std::size_t current = add_current(s, street(true), truth, truth);
-  const Config config = test_config();
+  const AlgorithmConfig config = test_config();
   std::vector<double> times;
   for (const auto& k : s.keyframes) times.push_back(k.time);
   EXPECT_FALSE(loop_candidates(s.poses, times, current, config.backend, 1).empty());
@@ -185,7 +185,7 @@ TEST(LoopCheck, VerticalCheckRejectsASlopedLookAlike) {
   // Now on the level deck, right beside the ramp's position in x-y.
   const auto level = liod::test::pose_xyz_yaw(1.0, 0.0, 0.0, 0.0);
   const std::size_t current = add_current(s, deck, level, level);
-  Config config = test_config();
+  AlgorithmConfig config = test_config();
   config.backend.similarity_check = false;  // isolate the vertical check
   const LoopCheck check = check_loop(s.keyframes, s.poses, current, 5, config);
   EXPECT_EQ(check.outcome, LoopOutcome::kVerticalDisagreement)
@@ -224,7 +224,7 @@ TEST(LoopCheck, OtherLevelOfADeckDoesNotClose) {
   const std::size_t current = add_current(s, upper, truth, truth);
   std::vector<double> times;
   for (const auto& k : s.keyframes) times.push_back(k.time);
-  Config config = test_config();
+  AlgorithmConfig config = test_config();
   EXPECT_FALSE(loop_candidates(s.poses, times, current, config.backend, 1).empty());  // 2D: a candidate
   config.backend.loop_distance = LoopDistance::k3D;
   config.backend.loop_radius_m = 2.5;

@@ -8,7 +8,7 @@
 #include <optional>
 #include <vector>
 
-#include "liod/config.hpp"
+#include "liod/algorithm_config.hpp"
 #include "liod/lidar_inertial_odometry.hpp"
 
 namespace {
@@ -60,7 +60,7 @@ liod::Scan sweep(double start, const std::vector<Post>& posts, std::uint64_t seq
 
 class StartUp : public ::testing::Test {
  protected:
-  liod::LidarInertialOdometry odometry{liod::Config{}};
+  liod::LidarInertialOdometry odometry{liod::FrontEndConfig{}};
   liod::LidarInertialOdometry* fed_too = nullptr;  // a second odometry given the same IMU samples
   double imu_time = 0.0;
 
@@ -153,7 +153,7 @@ TEST_F(StartUp, AScanAfterMoreThanTheImuKeptIsFlaggedAsAcrossAnImuGap) {
 // what is handed over is what is registered.
 TEST_F(StartUp, FeaturesExtractedElsewhereGiveTheSameStates) {
   const std::vector<Post> posts{{8.0, 4.0}, {-6.0, 5.0}, {12.0, -4.5}, {-10.0, -6.0}, {20.0, 3.0}, {3.0, -9.0}};
-  const liod::Config config;
+  const liod::FrontEndConfig config;
   liod::LidarInertialOdometry handed_over(config);
   fed_too = &handed_over;
   liod::FeatureExtractor extractor(liod::LidarInertialOdometry::feature_params(config));

@@ -1,6 +1,5 @@
 #pragma once
-// Online calibration of each beam against the map (docs/odometry.md "Beam angles" and the fifth
-// session of 2026-12-05).
+// Online calibration of each beam against the map (docs/design.md, "Beam calibration").
 //
 // Elevation. A unit's true beam angles differ from its published table (RS-Helios: rounded to
 // 0.01 deg, so by up to 0.005 deg even after a perfect factory calibration). A beam whose elevation
@@ -17,7 +16,7 @@
 // Range (optional). Each channel also measures its ranges a few millimetres long or short. On the
 // near ground and on walls that moves its points across the surface; uncorrected, the elevation
 // calibration, which has no other parameter, answers the near rings' range offsets with a common
-// tilt of the far beams (highway seed 29: +0.002 to +0.004 deg that the unit does not have). A
+// tilt of the far beams (a few thousandths of a degree that the unit does not have). A
 // beam's range offset is learned the same way from its residuals off the far ground, less the
 // beams' mean: a common offset is seen only where a surface is seen from both sides, and is the one
 // the sensor's own calibration gets best.

@@ -1,7 +1,7 @@
 #pragma once
 // Edge and planar feature selection by LOAM curvature with the seed paper's distance-adaptive
 // neighbourhood: c = ||sum_{j in S} (X_i - X_j)|| / (|S| * ||X_i||), |S| = 10 / 8 / 6 / 4 for
-// ranges <= 10 / <= 20 / <= 30 / > 30 m (DESIGN.md, "Distance-adaptive curvature").
+// ranges <= 10 / <= 20 / <= 30 / > 30 m (the seed paper, "Distance-adaptive curvature").
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -9,6 +9,7 @@
 #include <optional>
 #include <vector>
 
+#include "liod/post_model.hpp"
 #include "liod/types.hpp"
 
 namespace liod {
@@ -47,13 +48,15 @@ struct FeatureParams {
   int sectors_per_ring = 8;
   int max_edges_per_sector = 6;
   /// An edge point that ends a surface seen at grazing incidence (the ring's range jumps beyond
-  /// it) is moved on by this share of its step from the surface's previous return; 0: never.
+  /// it) is moved on by this share of its step from the surface's previous return; 0: never. The
+  /// surface ends somewhere between that return and the next, at a phase uniform over the step:
+  /// half a step on average (surface_end_shift).
   double surface_end_extrapolation = 0.5;
   /// An edge that ends a ring's run of returns standing out before both neighbours, at most this
   /// wide (a post, a pole), is moved to post_depth_m before the run's axis (narrow_run_axis) along
   /// the horizontal ray, where the post model (map_correspondence.hpp) expects its surface; 0: never.
   double post_max_width_m = 0.0;
-  double post_depth_m = 0.08;
+  double post_depth_m = kPostAxisDepthM;
   /// An edge where the ring runs off a surface across its top or bottom border (a guard rail's
   /// lower edge, a barrier's top) is dropped when the next ring up or down carries the surface on
   /// beyond it: within this of the horizontal line through the ring's last returns on it. Where a

@@ -1,6 +1,6 @@
 #pragma once
 // Bidirectional Hausdorff distance H(A,B) = max(h(A,B), h(B,A)), h(A,B) = max_a min_b ||a - b||
-// (DESIGN.md, keyframe gating and loop-closure similarity). Computed on downsampled clouds with
+// (the seed paper, keyframe gating and loop-closure similarity). Computed on downsampled clouds with
 // a voxel hash; distances are saturated at `cap`, which is all a threshold test needs.
 
 #include <Eigen/Core>

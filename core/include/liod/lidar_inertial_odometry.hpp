@@ -11,7 +11,7 @@
 
 #include "liod/beam_calibration.hpp"
 #include "liod/bias_holds.hpp"
-#include "liod/config.hpp"
+#include "liod/algorithm_config.hpp"
 #include "liod/curvature_features.hpp"
 #include "liod/deskew.hpp"
 #include "liod/imu_buffer.hpp"
@@ -60,7 +60,7 @@ struct OdometryResult {
 
 class LidarInertialOdometry {
  public:
-  explicit LidarInertialOdometry(const Config& config);
+  explicit LidarInertialOdometry(const FrontEndConfig& config);
 
   /// Samples must arrive in time order; out-of-order or non-finite ones are dropped (counted).
   void add_imu(const ImuSample& sample) { imu_.add(sample); }
@@ -78,7 +78,7 @@ class LidarInertialOdometry {
   /// before); result.features_ms is then 0.
   std::optional<OdometryResult> process(const Scan& scan, const ScanFeatures& extracted);
   /// The feature extractor's parameters for this configuration.
-  static FeatureParams feature_params(const Config& config);
+  static FeatureParams feature_params(const FrontEndConfig& config);
 
   /// The gravity vector in the world frame (estimated) that the states are propagated with.
   const Eigen::Vector3d& gravity() const { return state_.gravity; }
@@ -117,7 +117,7 @@ class LidarInertialOdometry {
   UpdateResult update(const Prediction& prediction, const DeskewedFeatures& features, const UpdateParams& params) const;
   void update_map(const DeskewedFeatures& features, OdometryResult& result);
 
-  Config config_;
+  FrontEndConfig config_;
   ExtrinsicsConfig extrinsics_;
   Pose lidar_to_imu_;
   ImuNoise noise_;

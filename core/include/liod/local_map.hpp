@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "liod/map_limits.hpp"
 #include "liod/voxel_grid.hpp"
 
 namespace liod {
@@ -18,8 +19,8 @@ class LocalMap {
   struct Voxel;
 
  public:
-  static constexpr int kMaxNeighbours = 8;
-  static constexpr int kMaxPointsPerVoxel = 32;
+  static constexpr int kMaxNeighbours = kMapMaxNeighbours;
+  static constexpr int kMaxPointsPerVoxel = kMapMaxPointsPerVoxel;
 
   /// max_points_per_voxel is capped at kMaxPointsPerVoxel.
   LocalMap(double voxel_size, int max_points_per_voxel, double min_point_spacing);

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "liod/local_map.hpp"
+#include "liod/post_model.hpp"
 
 namespace liod {
 
@@ -48,9 +49,7 @@ struct PostParams {
   double radius_m = 0.4;          // ...within this of the query's axis
   double max_width_m = 0.2;       // their horizontal spread (largest distance between them, across up)
   double min_height_m = 0.1;      // their vertical extent at least (a horizontal edge has none)
-  /// How far behind an edge point, along the horizontal ray that saw it, a post's axis lies: half
-  /// a post's depth (a guard-rail post is 16 cm square). 0: the edge points themselves.
-  double depth_m = 0.08;
+  double depth_m = kPostAxisDepthM;  // 0: the edge points themselves
 };
 
 /// Where the axes of the posts that the edge points (world frame) may lie on are: each point

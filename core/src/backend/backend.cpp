@@ -42,7 +42,7 @@ Eigen::Isometry3d interpolate(const Eigen::Isometry3d& a, const Eigen::Isometry3
 
 }  // namespace
 
-Backend::Backend(const Config& config, std::shared_ptr<KeyframeSpill> spill)
+Backend::Backend(const AlgorithmConfig& config, std::shared_ptr<KeyframeSpill> spill)
     : config_(config), keyframes_(static_cast<std::size_t>(config.backend.memory_keyframes), std::move(spill)) {}
 
 bool Backend::add_keyframe(const Keyframe& keyframe) {

@@ -248,7 +248,7 @@ SimilarityResult similarity_search(const std::vector<Eigen::Vector3d>& cloud_bod
 }
 
 LoopCheck check_loop(KeyframeStore& keyframes, const std::vector<Eigen::Isometry3d>& poses, std::size_t current,
-                     std::size_t candidate, const Config& config) {
+                     std::size_t candidate, const AlgorithmConfig& config) {
   const auto start = std::chrono::steady_clock::now();
   const BackendConfig& b = config.backend;
   LoopCheck check;
@@ -364,7 +364,7 @@ LoopCheck check_loop(KeyframeStore& keyframes, const std::vector<Eigen::Isometry
 }
 
 LoopCheck check_loop(const std::vector<BackendKeyframe>& keyframes, const std::vector<Eigen::Isometry3d>& poses,
-                     std::size_t current, std::size_t candidate, const Config& config) {
+                     std::size_t current, std::size_t candidate, const AlgorithmConfig& config) {
   KeyframeStore store(0, nullptr);
   for (const auto& k : keyframes) store.add(k);
   return check_loop(store, poses, current, candidate, config);

@@ -1,5 +1,5 @@
 #pragma once
-// liod's backend (DESIGN.md module 3, issue 5): keyframes from the front end go into a pose
+// liod's backend (the seed paper's module 3; docs/backend.md): keyframes from the front end go into a pose
 // graph; each new keyframe is checked for a loop against older ones (loop_closure.hpp) and a
 // verified loop triggers a full pose-graph solve. Between loops the graph only chains the
 // odometry (no solve), so a long drive stays cheap. The result is a correction T_world_odom
@@ -17,7 +17,7 @@
 #include "liod/backend/keyframe_store.hpp"
 #include "liod/backend/loop_closure.hpp"
 #include "liod/backend/pose_graph.hpp"
-#include "liod/config.hpp"
+#include "liod/algorithm_config.hpp"
 #include "liod/imu_preintegration.hpp"
 #include "liod/keyframe.hpp"
 
@@ -36,7 +36,7 @@ class Backend {
  public:
   /// `spill`: where keyframe clouds go beyond backend.memory_keyframes (nullptr: all stay in
   /// memory; the daemon passes a KeyframeDirectory, map_store.hpp).
-  explicit Backend(const Config& config, std::shared_ptr<KeyframeSpill> spill = nullptr);
+  explicit Backend(const AlgorithmConfig& config, std::shared_ptr<KeyframeSpill> spill = nullptr);
 
   /// Adds a keyframe (its points are in the odometry's world frame, as the front end keeps
   /// them); returns true when it closed a loop (and the graph was re-optimised).
@@ -65,7 +65,7 @@ class Backend {
   bool search_loop(std::size_t current);
   bool close_loop(const LoopCheck& check);
 
-  Config config_;
+  AlgorithmConfig config_;
   PoseGraph graph_;
   KeyframeStore keyframes_;
   std::vector<LoopCheck> checks_;

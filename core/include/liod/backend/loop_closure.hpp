@@ -1,5 +1,5 @@
 #pragma once
-// Loop-closure detection and verification (DESIGN.md, "Loop closure"), pure functions:
+// Loop-closure detection and verification (the seed paper, "Loop closure"), pure functions:
 //  1. candidates: past keyframes older than a time gap within a radius of the current keyframe,
 //     measured in the x-y plane (z drifts most) or in 3D (ablation);
 //  2. similarity: a Hausdorff test between the current keyframe's cloud and the candidate's
@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "liod/backend/keyframe_store.hpp"
-#include "liod/config.hpp"
+#include "liod/algorithm_config.hpp"
 
 namespace liod {
 
@@ -86,9 +86,9 @@ struct LoopCheck {
 /// current estimates; `keyframes` the stored keyframes, index = node (only the current one and
 /// the candidate's sub-map are read, through the store's cache).
 LoopCheck check_loop(KeyframeStore& keyframes, const std::vector<Eigen::Isometry3d>& poses, std::size_t current,
-                     std::size_t candidate, const Config& config);
+                     std::size_t candidate, const AlgorithmConfig& config);
 /// The same on keyframes all in memory (tests).
 LoopCheck check_loop(const std::vector<BackendKeyframe>& keyframes, const std::vector<Eigen::Isometry3d>& poses,
-                     std::size_t current, std::size_t candidate, const Config& config);
+                     std::size_t current, std::size_t candidate, const AlgorithmConfig& config);
 
 }  // namespace liod

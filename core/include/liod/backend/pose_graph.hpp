@@ -1,5 +1,5 @@
 #pragma once
-// The keyframe pose graph (DESIGN.md, loop closure): one SE(3) node per keyframe, relative-pose
+// The keyframe pose graph (the seed paper, loop closure): one SE(3) node per keyframe, relative-pose
 // factors between consecutive keyframes (LiDAR-inertial odometry) and across loops (scan-to-map
 // registration), a tilt factor per node (roll/pitch are observable from gravity in the
 // tightly coupled front end, so they must not absorb a loop's correction) and the first node

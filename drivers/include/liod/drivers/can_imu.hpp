@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "liod/config.hpp"
+#include "liod/drivers/sensor_config.hpp"
 #include "liod/types.hpp"
 
 struct can_frame;  // <linux/can.h>

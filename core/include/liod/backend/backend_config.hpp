@@ -1,0 +1,41 @@
+#pragma once
+// The backend's configuration: loop closure, the pose graph and the state it keeps
+// (docs/backend.md).
+
+namespace liod {
+
+enum class LoopDistance { k2D, k3D };
+
+/// The backend (issue 5): keyframe pose graph, loop closure, maps. See docs/backend.md.
+struct BackendConfig {
+  bool enabled = false;
+  double loop_radius_m = 10.0;          // candidates within this distance of the current keyframe...
+  double loop_time_gap_s = 20.0;        // ...and at least this much older
+  LoopDistance loop_distance = LoopDistance::k2D;  // 2d: x-y distance (the paper) | 3d (ablation)
+  int loop_candidates = 2;              // candidates verified per keyframe (nearest first, distinct passes)
+  int loop_cooldown_keyframes = 3;      // keyframes without loop search after an accepted loop
+  int submap_keyframes = 10;            // the candidate's sub-map: candidate +- this many keyframes
+  bool similarity_check = true;         // the Hausdorff similarity test before registration (ablation)
+  double similarity_threshold_m = 1.0;  // partial Hausdorff distance above which a pair is dissimilar
+  double similarity_quantile = 0.8;     // quantile of the nearest distances (1 = classic Hausdorff)
+  double similarity_search_m = 3.0;     // coarse alignment search, +- in x and y
+  double similarity_search_yaw_deg = 3.0;  // and in yaw
+  double loop_max_rms_m = 0.1;          // registration accepted below this point-to-plane rms...
+  double loop_min_inlier_fraction = 0.5;  // ...with at least this fraction of the points within 2 rms
+  double max_vertical_m = 1.5;          // registered height minus graph height beyond this: false loop
+  double max_tilt_deg = 2.0;            // registered vs graph tilt (roll/pitch) beyond this: false loop
+  double robust_loss_scale = 3.0;       // Cauchy scale of the loop factors, in sigmas
+  double odometry_translation_sigma_m = 0.05;  // odometry factor between consecutive keyframes
+  double odometry_rotation_sigma_deg = 0.1;
+  double loop_translation_sigma_m = 0.03;      // loop factor: ~2x the registration error measured on the sim drives
+  double loop_rotation_sigma_deg = 0.1;
+  double tilt_sigma_deg = 0.5;          // gravity (roll/pitch) factor per keyframe; 0 = none
+  int max_solver_iterations = 50;
+  int solve_window_keyframes = 1000;    // a loop's solve frees at most this many newest keyframes; 0 = all
+  double keyframe_voxel_m = 0.3;        // keyframe points kept by the backend (body frame)
+  double map_voxel_m = 0.3;             // downsampling of the global map PCD
+  bool persist = false;                 // write keyframes + graph to output.state_dir (atomically)
+  int memory_keyframes = 200;           // keyframe clouds kept in memory (LRU); others on disk; 0 = all in memory
+};
+
+}  // namespace liod

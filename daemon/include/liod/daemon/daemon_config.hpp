@@ -1,0 +1,54 @@
+#pragma once
+// The daemon's configuration: logging, outputs, threads and the pose socket (config/liod.yaml
+// explains each key).
+
+#include <string>
+
+namespace liod {
+
+struct LogConfig {
+  std::string level = "info";  // trace, debug, info, warn, error, off
+};
+
+struct OutputConfig {
+  std::string pose_socket = "/run/liod/pose.sock";
+  std::string state_dir = "/var/lib/liod";
+};
+
+struct ThreadConfig {
+  int priority = 0;  // 0 = normal scheduling; 1..99 = SCHED_FIFO priority (needs CAP_SYS_NICE)
+  int cpu = -1;      // -1 = any CPU; else pin to this CPU
+};
+
+struct ThreadsConfig {
+  ThreadConfig lidar{70, -1};
+  ThreadConfig imu{75, -1};
+  ThreadConfig odometry{60, -1};
+  ThreadConfig publisher{65, -1};
+  int backend_nice = 10;            // the backend runs SCHED_OTHER at this nice value
+  int scan_ring = 8;                // ring sizes (rounded up to powers of two)
+  int imu_ring = 4096;
+  int pose_ring = 4096;
+  int keyframe_ring = 64;
+};
+
+struct PoseSocketConfig {
+  std::string mode = "0660";        // permissions of the socket file (octal)
+  int max_clients = 32;
+  int client_buffer_bytes = 262144; // a client further behind than this skips messages
+  double stuck_timeout_s = 2.0;     // a client that accepts nothing for this long is disconnected
+  bool imu_rate = true;             // also publish IMU-rate poses
+  double imu_rate_horizon_s = 1.0;  // no IMU-rate pose more than this after the last scan update (data time)
+  double health_interval_s = 1.0;   // health message period on the socket
+  double health_log_interval_s = 10.0;  // health line period in the log
+};
+
+/// Everything the daemon's own parts need.
+struct DaemonConfig {
+  LogConfig log;
+  OutputConfig output;
+  ThreadsConfig threads;
+  PoseSocketConfig pose_socket;
+};
+
+}  // namespace liod
