@@ -240,8 +240,8 @@ MsopStatus MsopDecoder::decode(std::span<const std::uint8_t> payload, bool dual,
       // §3.2: channel azimuth interpolated over the block step; §4: final = + horizontal offset. Not
       // rounded to 0.01° as rs_driver and nebula do: the laser fires where the head has turned to,
       // and a channel's rounding, the same every turn, turned its points by up to 0.005°: as much as
-      // a unit's own beam angle errors, which the map relays into a heading drift (docs/odometry.md,
-      // "The channel azimuth's rounding").
+      // a unit's own beam angle errors, which the map relays into a heading drift (docs/design.md,
+      // "Open problems").
       const float az_ch = static_cast<float>(az[k]) + step * se.az_fraction;
       const auto tf = trig_at(trig_, az_ch + le.horizontal_units);
       const auto tc = trig_at(trig_, az_ch);

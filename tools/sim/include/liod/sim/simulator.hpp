@@ -22,7 +22,7 @@ struct SimConfig {
   double imu_rate = 200.0;
   bool noise = true;          // false: exact IMU, no LiDAR range noise/bias/angle error
   // The unit's true beam angles differ from its published table by up to this (uniform, per
-  // channel); 0 isolates what the rest of the noise costs (docs/odometry.md "Beam angles").
+  // channel); 0 isolates what the rest of the noise costs (docs/design.md, "Beam calibration").
   double angle_error_deg = 0.005;
   bool dual_return = false;
   bool ego_body = true;       // the LiDAR sees the roof and bonnet of its own car
