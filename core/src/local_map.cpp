@@ -174,22 +174,66 @@ int LocalMap::nearest(const Eigen::Vector3d& query, int k, double max_distance,
   return NeighbourSearch(*this).nearest(query, k, max_distance, out);
 }
 
+void LocalMap::NeighbourSearch::Nearest::offer(float d2, std::uint16_t handle) {
+  if (d2 >= worst) return;
+  int pos = found < k ? found : k - 1;
+  while (best_d2[static_cast<std::size_t>(pos)] > d2) {
+    best_d2[static_cast<std::size_t>(pos) + 1] = best_d2[static_cast<std::size_t>(pos)];
+    best[static_cast<std::size_t>(pos)] = best[static_cast<std::size_t>(pos - 1)];
+    --pos;
+  }
+  best_d2[static_cast<std::size_t>(pos) + 1] = d2;
+  best[static_cast<std::size_t>(pos)] = handle;
+  if (found < k) ++found;
+  if (found == k) worst = best_d2[static_cast<std::size_t>(k)];
+}
+
+void LocalMap::NeighbourSearch::prefetch_block(const VoxelKey& own, const VoxelKey& lo, const VoxelKey& hi) const {
+  // The block's hash slots lie scattered over the table: ask for all of them at once, so that
+  // their cache misses overlap instead of coming one after another in the visits.
+  for (int i = std::max(lo.x - own.x, -1); i <= std::min(hi.x - own.x, 1); ++i) {
+    for (int j = std::max(lo.y - own.y, -1); j <= std::min(hi.y - own.y, 1); ++j) {
+      for (int l = std::max(lo.z - own.z, -1); l <= std::min(hi.z - own.z, 1); ++l) {
+        prefetch(&map_->slots_[map_->slot_of({own.x + i, own.y + j, own.z + l})]);
+      }
+    }
+  }
+}
+
+void LocalMap::NeighbourSearch::visit(int offset, const VoxelKey& key, const Eigen::Vector3f& query,
+                                      Nearest& nearest) {
+  if (!(looked_up_ >> offset & 1U)) {
+    voxels_[static_cast<std::size_t>(offset)] = map_->find(key);
+    looked_up_ |= 1U << offset;
+  }
+  const Voxel* voxel = voxels_[static_cast<std::size_t>(offset)];
+  if (voxel == nullptr) return;
+  const std::uint32_t count = voxel->count;
+  const float qx = query.x();
+  const float qy = query.y();
+  const float qz = query.z();
+  std::array<float, kMaxPointsPerVoxel> d2;
+  for (std::uint32_t b = 0; b * kBlock < count; ++b) {  // whole blocks: the tail's d2 go unread
+    const Voxel::Block& block = voxel->blocks[b];
+    for (int l = 0; l < kBlock; ++l) {
+      const auto lane = static_cast<std::size_t>(l);
+      d2[b * kBlock + static_cast<std::uint32_t>(l)] =
+          squared_norm(block.x[lane] - qx, block.y[lane] - qy, block.z[lane] - qz);
+    }
+  }
+  for (std::uint32_t j = 0; j < count; ++j) {
+    nearest.offer(d2[j], static_cast<std::uint16_t>(offset << 5 | static_cast<int>(j)));
+  }
+}
+
 int LocalMap::NeighbourSearch::nearest(const Eigen::Vector3d& query, int k, double max_distance,
                                        std::array<Eigen::Vector3d, kMaxNeighbours>& out) {
-  k = std::min(k, kMaxNeighbours);
-  // best_d2[i + 1] is the i-th nearest's squared distance; best_d2[0], below any distance, ends
-  // the insertion's shifting without a bounds test.
-  std::array<float, kMaxNeighbours + 1> best_d2;
-  best_d2[0] = -std::numeric_limits<float>::infinity();
-  // Which point each of them is: its voxel's block offset (voxels_) times 32 plus its index
-  // there, so that the insertion below shifts a small integer, not the point.
   static_assert(kMaxPointsPerVoxel <= 32, "a point's index takes 5 bits of its handle");
-  std::array<std::uint16_t, kMaxNeighbours> best;
-  int found = 0;
-  float worst = static_cast<float>(max_distance * max_distance);
-  const float qx = static_cast<float>(query.x());
-  const float qy = static_cast<float>(query.y());
-  const float qz = static_cast<float>(query.z());
+  Nearest nearest;
+  nearest.k = std::min(k, kMaxNeighbours);
+  nearest.best_d2[0] = -std::numeric_limits<float>::infinity();
+  nearest.worst = static_cast<float>(max_distance * max_distance);
+  const Eigen::Vector3f q = query.cast<float>();
   // Only the voxels that overlap the query's gate box can hold a neighbour: 1 to 8 of them for a
   // gate up to half a voxel, at most 27 for a gate up to a whole one (the configuration's limit,
   // hence the block of 27 around the query's voxel). The query's own voxel goes first; once k
@@ -203,84 +247,45 @@ int LocalMap::NeighbourSearch::nearest(const Eigen::Vector3d& query, int k, doub
     centre_ = own;
     have_centre_ = true;
     looked_up_ = 0;
-    // The block's hash slots lie scattered over the table: ask for all of them at once, so that
-    // their cache misses overlap instead of coming one after another in the visits below.
-    for (int i = std::max(lo.x - own.x, -1); i <= std::min(hi.x - own.x, 1); ++i) {
-      for (int j = std::max(lo.y - own.y, -1); j <= std::min(hi.y - own.y, 1); ++j) {
-        for (int l = std::max(lo.z - own.z, -1); l <= std::min(hi.z - own.z, 1); ++l) {
-          prefetch(&map_->slots_[map_->slot_of({own.x + i, own.y + j, own.z + l})]);
-        }
-      }
-    }
+    prefetch_block(own, lo, hi);
   }
   const float voxel_size = static_cast<float>(1.0 / inverse_voxel_size);
   // From the query to a voxel's box, per axis 0 inside it: a sum of one term per axis, so the
   // 3 x 3 terms of the block are computed once (squared), not for each of its 27 voxels.
-  auto axis_terms = [&](float q, std::int32_t centre) {
+  auto axis_terms = [&](float coordinate, std::int32_t centre) {
     std::array<float, 3> terms;
     for (int i = 0; i < 3; ++i) {
       const float lo_edge = static_cast<float>(centre - 1 + i) * voxel_size;
-      const float gap = std::max(lo_edge - q, 0.0F) + std::max(q - lo_edge - voxel_size, 0.0F);
+      const float gap = std::max(lo_edge - coordinate, 0.0F) + std::max(coordinate - lo_edge - voxel_size, 0.0F);
       terms[static_cast<std::size_t>(i)] = gap * gap;
     }
     return terms;
   };
-  const std::array<float, 3> box_x = axis_terms(qx, own.x);
-  const std::array<float, 3> box_y = axis_terms(qy, own.y);
-  const std::array<float, 3> box_z = axis_terms(qz, own.z);
-  auto visit = [&](int offset, const VoxelKey& key) {  // offset: 9 x + 3 y + z in the block, 0..26
-    if (!(looked_up_ >> offset & 1U)) {
-      voxels_[static_cast<std::size_t>(offset)] = map_->find(key);
-      looked_up_ |= 1U << offset;
-    }
-    const Voxel* voxel = voxels_[static_cast<std::size_t>(offset)];
-    if (voxel == nullptr) return;
-    const std::uint32_t count = voxel->count;
-    std::array<float, kMaxPointsPerVoxel> d2;
-    for (std::uint32_t b = 0; b * kBlock < count; ++b) {  // whole blocks: the tail's d2 go unread
-      const Voxel::Block& block = voxel->blocks[b];
-      for (int l = 0; l < kBlock; ++l) {
-        const auto lane = static_cast<std::size_t>(l);
-        d2[b * kBlock + static_cast<std::uint32_t>(l)] =
-            squared_norm(block.x[lane] - qx, block.y[lane] - qy, block.z[lane] - qz);
-      }
-    }
-    for (std::uint32_t j = 0; j < count; ++j) {
-      if (d2[j] >= worst) continue;
-      int pos = found < k ? found : k - 1;
-      while (best_d2[static_cast<std::size_t>(pos)] > d2[j]) {
-        best_d2[static_cast<std::size_t>(pos) + 1] = best_d2[static_cast<std::size_t>(pos)];
-        best[static_cast<std::size_t>(pos)] = best[static_cast<std::size_t>(pos - 1)];
-        --pos;
-      }
-      best_d2[static_cast<std::size_t>(pos) + 1] = d2[j];
-      best[static_cast<std::size_t>(pos)] = static_cast<std::uint16_t>(offset << 5 | static_cast<int>(j));
-      if (found < k) ++found;
-      if (found == k) worst = best_d2[static_cast<std::size_t>(k)];
-    }
-  };
+  const std::array<float, 3> box_x = axis_terms(q.x(), own.x);
+  const std::array<float, 3> box_y = axis_terms(q.y(), own.y);
+  const std::array<float, 3> box_z = axis_terms(q.z(), own.z);
   constexpr int kOwn = 13;  // the block's centre
-  visit(kOwn, own);
+  visit(kOwn, own, q, nearest);
   // A sum of non-negative terms is at least each of them (also rounded): once an axis's term
   // reaches the k-th distance, its whole slab of the block is skipped.
   for (int i = std::max(lo.x - own.x, -1) + 1; i <= std::min(hi.x - own.x, 1) + 1; ++i) {
     const float sx = box_x[static_cast<std::size_t>(i)];
-    if (sx >= worst) continue;
+    if (sx >= nearest.worst) continue;
     for (int j = std::max(lo.y - own.y, -1) + 1; j <= std::min(hi.y - own.y, 1) + 1; ++j) {
       const float sy = box_y[static_cast<std::size_t>(j)];
-      if (sy >= worst) continue;
+      if (sy >= nearest.worst) continue;
       for (int l = std::max(lo.z - own.z, -1) + 1; l <= std::min(hi.z - own.z, 1) + 1; ++l) {
         const int offset = 9 * i + 3 * j + l;
-        if (offset == kOwn || sx + (sy + box_z[static_cast<std::size_t>(l)]) >= worst) continue;
-        visit(offset, {own.x + i - 1, own.y + j - 1, own.z + l - 1});
+        if (offset == kOwn || sx + (sy + box_z[static_cast<std::size_t>(l)]) >= nearest.worst) continue;
+        visit(offset, {own.x + i - 1, own.y + j - 1, own.z + l - 1}, q, nearest);
       }
     }
   }
-  for (int i = 0; i < found; ++i) {
-    const std::uint16_t handle = best[static_cast<std::size_t>(i)];
+  for (int i = 0; i < nearest.found; ++i) {
+    const std::uint16_t handle = nearest.best[static_cast<std::size_t>(i)];
     out[static_cast<std::size_t>(i)] = voxels_[handle >> 5U]->point(handle & 31U).cast<double>();
   }
-  return found;
+  return nearest.found;
 }
 
 std::vector<Eigen::Vector3d> LocalMap::points() const {

@@ -53,6 +53,23 @@ class LocalMap {
                 std::array<Eigen::Vector3d, kMaxNeighbours>& out);
 
    private:
+    // The k nearest so far, nearest first: best_d2[i + 1] is the i-th's squared distance
+    // (best_d2[0], below any distance, ends the insertion's shifting without a bounds test), and
+    // best[i] which point it is: its voxel's block offset times 32 plus its index there, so that
+    // the insertion shifts a small integer, not the point.
+    struct Nearest {
+      int k = 0;
+      int found = 0;
+      float worst = 0.0F;  // the gate's square until k are found, then the k-th's squared distance
+      std::array<float, kMaxNeighbours + 1> best_d2;
+      std::array<std::uint16_t, kMaxNeighbours> best;
+      void offer(float d2, std::uint16_t handle);
+    };
+    /// Prefetches the hash slots of the block of voxels around `own` that the gate box reaches.
+    void prefetch_block(const VoxelKey& own, const VoxelKey& lo, const VoxelKey& hi) const;
+    /// Offers the points of the voxel at `offset` (9 x + 3 y + z in the block, 0..26) to `nearest`.
+    void visit(int offset, const VoxelKey& key, const Eigen::Vector3f& query, Nearest& nearest);
+
     const LocalMap* map_;
     VoxelKey centre_;
     bool have_centre_ = false;

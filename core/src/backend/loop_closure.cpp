@@ -1,7 +1,6 @@
 #include "liod/backend/loop_closure.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <unordered_map>
@@ -61,22 +60,6 @@ double partial_directed(const std::vector<Eigen::Vector3d>& a, const NearestGrid
   for (const auto& p : a) scratch.push_back(b.distance(p));
   return quantile_of(scratch, q);
 }
-
-std::vector<Eigen::Vector3d> to_world(const std::vector<Eigen::Vector3f>& body, const Eigen::Isometry3d& pose) {
-  std::vector<Eigen::Vector3d> out;
-  out.reserve(body.size());
-  for (const auto& p : body) out.push_back(pose * p.cast<double>());
-  return out;
-}
-
-std::vector<Eigen::Vector3d> to_double(const std::vector<Eigen::Vector3f>& in) {
-  std::vector<Eigen::Vector3d> out;
-  out.reserve(in.size());
-  for (const auto& p : in) out.push_back(p.cast<double>());
-  return out;
-}
-
-Eigen::Vector3d up_in_body(const Eigen::Isometry3d& pose) { return pose.linear().transpose() * Eigen::Vector3d::UnitZ(); }
 
 }  // namespace
 
@@ -158,6 +141,59 @@ std::vector<Eigen::Vector3d> structure_points(const std::vector<Eigen::Vector3d>
 
 }  // namespace
 
+namespace {
+
+struct Hypothesis {
+  double x = 0, y = 0, z = 0, yaw = 0;
+};
+
+// The alignment of `base` (the scan's structure points relative to `centre`) on the sub-map that
+// minimises the partial Hausdorff distance. Coarse to fine: x-y on a 1 m grid (the clouds are ~1 m
+// voxels), then yaw, then z in steps of half the vertical limit (a larger z offset would be
+// rejected later anyway), then x-y on a 0.5 m grid around the best.
+Hypothesis search_alignment(const std::vector<Eigen::Vector3d>& base, const Eigen::Vector3d& centre,
+                            const NearestGrid& grid, double cap, const BackendConfig& config) {
+  const double q = config.similarity_quantile;
+  std::vector<double> scratch;
+  std::vector<Eigen::Vector3d> moved(base.size());
+  auto score = [&](const Hypothesis& h) {
+    const Eigen::Matrix3d r = Eigen::AngleAxisd(h.yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const Eigen::Vector3d t = centre + Eigen::Vector3d(h.x, h.y, h.z);
+    for (std::size_t i = 0; i < base.size(); ++i) moved[i] = r * base[i] + t;
+    // Ties go to the smaller offset (the odometry's guess is the prior).
+    return partial_directed(moved, grid, q, cap, scratch) + 1e-6 * std::hypot(h.x, h.y, h.z);
+  };
+  Hypothesis best;
+  double best_score = score(best);
+  auto consider = [&](const Hypothesis& h) {
+    const double d = score(h);
+    if (d < best_score) {
+      best_score = d;
+      best = h;
+    }
+  };
+  const int nxy = static_cast<int>(std::floor(config.similarity_search_m));
+  for (int ix = -nxy; ix <= nxy; ++ix) {
+    for (int iy = -nxy; iy <= nxy; ++iy) consider({static_cast<double>(ix), static_cast<double>(iy), 0.0, 0.0});
+  }
+  const double yaw_limit = config.similarity_search_yaw_deg * kDegToRad;
+  const Hypothesis after_xy = best;
+  for (int k = -2; k <= 2; ++k) {
+    if (k != 0 && yaw_limit > 0.0) consider({after_xy.x, after_xy.y, 0.0, yaw_limit * k / 2.0});
+  }
+  const Hypothesis after_yaw = best;
+  for (int k : {-1, 1}) consider({after_yaw.x, after_yaw.y, 0.5 * config.max_vertical_m * k, after_yaw.yaw});
+  const Hypothesis after_z = best;
+  for (int ix = -1; ix <= 1; ++ix) {
+    for (int iy = -1; iy <= 1; ++iy) {
+      if (ix != 0 || iy != 0) consider({after_z.x + 0.5 * ix, after_z.y + 0.5 * iy, after_z.z, after_z.yaw});
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
 SimilarityResult similarity_search(const std::vector<Eigen::Vector3d>& cloud_body, const Eigen::Isometry3d& guess,
                                    const std::vector<Eigen::Vector3d>& submap_world,
                                    const std::vector<Eigen::Vector3d>& candidate_world, const BackendConfig& config) {
@@ -178,47 +214,7 @@ SimilarityResult similarity_search(const std::vector<Eigen::Vector3d>& cloud_bod
   const std::size_t stride = std::max<std::size_t>(1, scan.size() / kSearchPoints);
   std::vector<Eigen::Vector3d> base;
   for (std::size_t i = 0; i < scan.size(); i += stride) base.push_back(scan[i] - centre);
-
-  struct Hypothesis {
-    double x = 0, y = 0, z = 0, yaw = 0;
-  };
-  std::vector<Eigen::Vector3d> moved(base.size());
-  auto score = [&](const Hypothesis& h) {
-    const Eigen::Matrix3d r = Eigen::AngleAxisd(h.yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    const Eigen::Vector3d t = centre + Eigen::Vector3d(h.x, h.y, h.z);
-    for (std::size_t i = 0; i < base.size(); ++i) moved[i] = r * base[i] + t;
-    // Ties go to the smaller offset (the odometry's guess is the prior).
-    return partial_directed(moved, grid, q, cap, scratch) + 1e-6 * std::hypot(h.x, h.y, h.z);
-  };
-  Hypothesis best;
-  double best_score = score(best);
-  auto consider = [&](const Hypothesis& h) {
-    const double d = score(h);
-    if (d < best_score) {
-      best_score = d;
-      best = h;
-    }
-  };
-  // Coarse to fine: x-y on a 1 m grid (the clouds are ~1 m voxels), then yaw, then z in steps
-  // of half the vertical limit (a larger z offset would be rejected later anyway), then x-y on
-  // a 0.5 m grid around the best.
-  const int nxy = static_cast<int>(std::floor(config.similarity_search_m));
-  for (int ix = -nxy; ix <= nxy; ++ix) {
-    for (int iy = -nxy; iy <= nxy; ++iy) consider({static_cast<double>(ix), static_cast<double>(iy), 0.0, 0.0});
-  }
-  const double yaw_limit = config.similarity_search_yaw_deg * kDegToRad;
-  const Hypothesis after_xy = best;
-  for (int k = -2; k <= 2; ++k) {
-    if (k != 0 && yaw_limit > 0.0) consider({after_xy.x, after_xy.y, 0.0, yaw_limit * k / 2.0});
-  }
-  const Hypothesis after_yaw = best;
-  for (int k : {-1, 1}) consider({after_yaw.x, after_yaw.y, 0.5 * config.max_vertical_m * k, after_yaw.yaw});
-  const Hypothesis after_z = best;
-  for (int ix = -1; ix <= 1; ++ix) {
-    for (int iy = -1; iy <= 1; ++iy) {
-      if (ix != 0 || iy != 0) consider({after_z.x + 0.5 * ix, after_z.y + 0.5 * iy, after_z.z, after_z.yaw});
-    }
-  }
+  const Hypothesis best = search_alignment(base, centre, grid, cap, config);
 
   SimilarityResult result;
   Eigen::Isometry3d delta = Eigen::Isometry3d::Identity();
@@ -245,129 +241,6 @@ SimilarityResult similarity_search(const std::vector<Eigen::Vector3d>& cloud_bod
   result.backward_m = partial_directed(cropped, NearestGrid(aligned, cap), q, cap, scratch);
   result.distance_m = std::max(result.forward_m, result.backward_m);
   return result;
-}
-
-LoopCheck check_loop(KeyframeStore& keyframes, const std::vector<Eigen::Isometry3d>& poses, std::size_t current,
-                     std::size_t candidate, const AlgorithmConfig& config) {
-  const auto start = std::chrono::steady_clock::now();
-  const BackendConfig& b = config.backend;
-  LoopCheck check;
-  check.current = current;
-  check.candidate = candidate;
-  auto done = [&](LoopOutcome outcome) {
-    check.outcome = outcome;
-    check.check_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    return check;
-  };
-
-  // The candidate's sub-map in the graph's world frame.
-  const std::size_t n = static_cast<std::size_t>(b.submap_keyframes);
-  const std::size_t first = candidate > n ? candidate - n : 0;
-  // Neighbours of the candidate only: never the recent keyframes of the current pass.
-  const std::size_t last = std::min({candidate + n, current - 1, keyframes.size() - 1});
-  const auto current_kf = keyframes.get(current);
-  const auto candidate_kf = keyframes.get(candidate);
-  std::vector<Eigen::Vector3d> submap_similarity;
-  LocalMap plane_map(config.odometry.map_voxel_m, config.odometry.map_points_per_voxel,
-                     config.odometry.map_min_point_spacing_m);
-  LocalMap edge_map = plane_map;
-  for (std::size_t k = first; k <= last; ++k) {
-    if (keyframes.time(current) - keyframes.time(k) < b.loop_time_gap_s) continue;
-    const auto kf = keyframes.get(k);
-    const auto sim = to_world(kf->similarity, poses[k]);
-    submap_similarity.insert(submap_similarity.end(), sim.begin(), sim.end());
-    plane_map.add(to_world(kf->planes, poses[k]), kf->id);
-    edge_map.add(to_world(kf->edges, poses[k]), kf->id);
-  }
-
-  const Eigen::Isometry3d guess = poses[current];
-  Eigen::Isometry3d initial = guess;
-  if (b.similarity_check) {
-    const auto similarity = similarity_search(to_double(current_kf->similarity), guess, submap_similarity,
-                                              to_world(candidate_kf->similarity, poses[candidate]), b);
-    check.similarity_m = similarity.distance_m;
-    check.similarity_forward_m = similarity.forward_m;
-    check.similarity_backward_m = similarity.backward_m;
-    if (similarity.distance_m > b.similarity_threshold_m) return done(LoopOutcome::kDissimilar);
-    initial = similarity.aligned;
-  }
-
-  // Scan-to-map registration: the front end's iterated update with a weak prior (a LiDAR-only
-  // Gauss-Newton); the prior is re-centred on each round's result so that it only regularises.
-  UpdateParams params;
-  params.max_iterations = 10;
-  params.lidar_noise_m = config.odometry.lidar_noise_m;
-  params.correspondence.max_distance_m = config.odometry.max_correspondence_m;
-  params.degeneracy_eigenvalue = config.odometry.degeneracy_eigenvalue;
-  StateCovariance weak = StateCovariance::Identity();
-  weak.diagonal().segment<3>(0).setConstant(std::pow(5.0 * kDegToRad, 2));
-  weak.diagonal().segment<3>(3).setConstant(2.0 * 2.0);
-  std::vector<Eigen::Vector3d> planes = voxel_downsample(to_double(current_kf->planes), config.odometry.plane_voxel_m);
-  std::vector<Eigen::Vector3d> edges = voxel_downsample(to_double(current_kf->edges), config.odometry.edge_voxel_m);
-  NavState x;
-  x.rotation = initial.linear();
-  x.position = initial.translation();
-  UpdateResult result;
-  // Coarse to fine gate: the first rounds search neighbours as far as the map's voxel allows
-  // (the coarse alignment leaves up to ~0.5 m), the last ones at the front end's gate.
-  constexpr int kRounds = 5;
-  const double fine_gate = config.odometry.max_correspondence_m;
-  const double coarse_gate = std::max(fine_gate, config.odometry.map_voxel_m);
-  for (int round = 0; round < kRounds; ++round) {
-    params.correspondence.max_distance_m = round < 2 ? coarse_gate : fine_gate;
-    result = iterated_update(x, weak, planes, plane_map, edges, edge_map, params);
-    const StateVector moved = boxminus(result.state, x);
-    x = result.state;
-    if (round >= 2 && moved.segment<3>(0).norm() < 0.05 * kDegToRad && moved.segment<3>(3).norm() < 0.01) {
-      check.converged = true;
-      break;
-    }
-  }
-  Eigen::Isometry3d registered = Eigen::Isometry3d::Identity();
-  registered.linear() = so3::normalize(x.rotation);
-  registered.translation() = x.position;
-  check.registered = registered;
-  check.degenerate_directions = result.degenerate_directions;
-
-  // Fit: rms over the points that found a plane; a point is an inlier when its residual is
-  // within twice the rms limit (the fraction counts every query, matched or not).
-  const double inlier_m = 2.0 * b.loop_max_rms_m;
-  int inliers = 0;
-  double squared = 0.0;
-  int matched = 0;
-  LocalMap::NeighbourSearch plane_search(plane_map);
-  for (const auto& p : planes) {
-    const Eigen::Vector3d q = registered * p;
-    const auto plane = plane_correspondence(plane_search, q, params.correspondence);
-    if (!plane) continue;
-    const double r = plane->evaluate(q);
-    squared += r * r;
-    ++matched;
-    if (std::abs(r) <= inlier_m) ++inliers;
-  }
-  check.inlier_fraction = planes.empty() ? 0.0 : static_cast<double>(inliers) / static_cast<double>(planes.size());
-  check.rms_m = matched > 0 ? std::sqrt(squared / matched) : 0.0;
-  if (!check.converged || check.degenerate_directions > 0 || check.rms_m > b.loop_max_rms_m ||
-      check.inlier_fraction < b.loop_min_inlier_fraction) {
-    return done(LoopOutcome::kRegistrationFailed);
-  }
-
-  // Vertical check against the graph (not the coarse alignment, which searched z).
-  check.dz_m = registered.translation().z() - guess.translation().z();
-  const double c = std::clamp(up_in_body(registered).dot(up_in_body(guess)), -1.0, 1.0);
-  check.tilt_deg = std::acos(c) / kDegToRad;
-  if (std::abs(check.dz_m) > b.max_vertical_m || check.tilt_deg > b.max_tilt_deg) {
-    return done(LoopOutcome::kVerticalDisagreement);
-  }
-  check.measured = poses[candidate].inverse() * registered;
-  return done(LoopOutcome::kAccepted);
-}
-
-LoopCheck check_loop(const std::vector<BackendKeyframe>& keyframes, const std::vector<Eigen::Isometry3d>& poses,
-                     std::size_t current, std::size_t candidate, const AlgorithmConfig& config) {
-  KeyframeStore store(0, nullptr);
-  for (const auto& k : keyframes) store.add(k);
-  return check_loop(store, poses, current, candidate, config);
 }
 
 }  // namespace liod

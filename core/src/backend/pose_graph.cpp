@@ -123,6 +123,30 @@ SolveReport PoseGraph::optimize(RobustLoss loss, double scale, int max_iteration
   return report;
 }
 
+namespace {
+
+// Scales are in sigmas of the whitened residual; Ceres' kernels take the squared norm, so the
+// parameter is the scale itself (rho(s) = a^2 log(1 + s / a^2) for Cauchy). None below 0.
+ceres::LossFunction* robust_loss(RobustLoss loss, double scale) {
+  if (scale <= 0.0) return nullptr;
+  if (loss == RobustLoss::kHuber) return new ceres::HuberLoss(scale);
+  if (loss == RobustLoss::kCauchy) return new ceres::CauchyLoss(scale);
+  return nullptr;
+}
+
+ceres::Solver::Summary run_solver(ceres::Problem& problem, int max_iterations) {
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  options.max_num_iterations = max_iterations;
+  options.num_threads = 1;  // the backend is one low-priority thread; also keeps replays deterministic
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  return summary;
+}
+
+}  // namespace
+
 SolveReport PoseGraph::solve(RobustLoss loss, double scale, int max_iterations, std::size_t first_free) {
   SolveReport report;
   first_free = std::max<std::size_t>(first_free, 1);  // node 0 is the prior: always held
@@ -178,26 +202,14 @@ SolveReport PoseGraph::solve(RobustLoss loss, double scale, int max_iterations, 
     add_node_blocks(f.from);
     add_node_blocks(f.to);
     ++report.factors;
-    ceres::LossFunction* robust = nullptr;
-    if (f.loop && scale > 0.0) {
-      // Scales are in sigmas of the whitened residual; Ceres' kernels take the squared norm, so
-      // the parameter is the scale itself (rho(s) = a^2 log(1 + s / a^2) for Cauchy).
-      if (loss == RobustLoss::kHuber) robust = new ceres::HuberLoss(scale);
-      if (loss == RobustLoss::kCauchy) robust = new ceres::CauchyLoss(scale);
-    }
+    ceres::LossFunction* robust = f.loop ? robust_loss(loss, scale) : nullptr;
     auto* cost = new ceres::AutoDiffCostFunction<RelativePoseError, 6, 4, 3, 4, 3>(
         new RelativePoseError(f.measured, sqrt_information(f.information)));
     problem.AddResidualBlock(cost, robust, q[f.from].coeffs().data(), p[f.from].data(), q[f.to].coeffs().data(),
                              p[f.to].data());
   }
 
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  options.max_num_iterations = max_iterations;
-  options.num_threads = 1;  // the backend is one low-priority thread; also keeps replays deterministic
-  options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
+  const ceres::Solver::Summary summary = run_solver(problem, max_iterations);
 
   for (std::size_t i = first_free; i < poses_.size(); ++i) {
     poses_[i].linear() = q[i].normalized().toRotationMatrix();
