@@ -27,6 +27,8 @@ void declare_front_end(Schema& s, FrontEndConfig& c) {
   s.real("imu.accel_bias_random_walk", &c.imu.accel_bias_random_walk, 1e-9, 10.0);
   s.real("imu.gravity_m_s2", &c.imu.gravity_m_s2, 9.7, 9.9);
   s.real("imu.max_gap_s", &c.imu.max_gap_s, 0.001, 10.0);
+  s.real("imu.gyro_range_rad_s", &c.imu.gyro_range_rad_s, 1.0, 1000.0);
+  s.real("imu.accel_range_m_s2", &c.imu.accel_range_m_s2, 10.0, 10000.0);
 
   s.vector3("extrinsics.lidar_to_imu.translation_m", &c.extrinsics.lidar_to_imu_translation, 10.0);
   s.quaternion("extrinsics.lidar_to_imu.rotation_xyzw", &c.extrinsics.lidar_to_imu_rotation);

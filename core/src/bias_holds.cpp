@@ -70,10 +70,16 @@ void BiasHolds::apply(StateCovariance& predicted_covariance, const NavState& pre
 bool BiasHolds::imu_contradicts(const NavState& updated, const NavState& predicted,
                                 const StateCovariance& predicted_covariance) {
   scans_since_inconsistent_ = std::min(scans_since_inconsistent_ + 1, config_.consistent_scans_to_release);
-  if (!(prediction_nis(updated, predicted, predicted_covariance) > config_.max_prediction_nis)) return false;
+  // A NaN distance (a state gone non-finite) contradicts as surely as a large one.
+  if (consistent(updated, predicted, predicted_covariance)) return false;
   ++inconsistent_scans_;
   scans_since_inconsistent_ = 0;
   return true;
+}
+
+bool BiasHolds::consistent(const NavState& updated, const NavState& predicted,
+                           const StateCovariance& predicted_covariance) const {
+  return prediction_nis(updated, predicted, predicted_covariance) <= config_.max_prediction_nis;
 }
 
 void BiasHolds::decide_next(double min_translation_eigenvalue, bool turning) {

@@ -16,7 +16,10 @@ constexpr double kGapAccelerationStd = 1.0;  // m/s^2
 
 void ImuBuffer::add(const ImuSample& sample) {
   const bool finite = std::isfinite(sample.time) && sample.gyro.allFinite() && sample.accel.allFinite();
-  if (!finite || (!samples_.empty() && sample.time <= samples_.back().time)) {
+  // Within the range a sample may be saturated but is a measurement; beyond it, it is not one.
+  const bool in_range = finite && sample.gyro.cwiseAbs().maxCoeff() <= gyro_range_ &&
+                        sample.accel.cwiseAbs().maxCoeff() <= accel_range_;
+  if (!in_range || (!samples_.empty() && sample.time <= samples_.back().time)) {
     ++dropped_;
     return;
   }

@@ -139,7 +139,7 @@ LidarInertialOdometry::LidarInertialOdometry(const FrontEndConfig& config)
       lidar_to_imu_{config.extrinsics.lidar_to_imu_rotation, config.extrinsics.lidar_to_imu_translation},
       update_params_(update_params(config)),
       extractor_(feature_params(config)),
-      imu_(kImuHistory_s),
+      imu_(kImuHistory_s, config.imu.gyro_range_rad_s, config.imu.accel_range_m_s2),
       start_up_(start_up_config(config)),
       holds_(bias_hold_config(config.odometry)),
       move_off_(move_off_config(config.odometry)),
@@ -268,13 +268,15 @@ void LidarInertialOdometry::process_scan(const Scan& scan, const ScanFeatures* e
   result.covariance = covariance_;
 }
 
-LidarInertialOdometry::Prediction LidarInertialOdometry::predict(const Scan& scan, OdometryResult& result) const {
+LidarInertialOdometry::Prediction LidarInertialOdometry::predict(const Scan& scan, OdometryResult& result,
+                                                                 ImuUse use) const {
   const double t_end = scan_end_time(scan);
   const NavState start = state_;
   auto intervals = imu_intervals(imu_.samples(), start.time, t_end);
-  const auto gaps = imu_.gaps(start.time, t_end, config_.imu.max_gap_s);
+  const auto gaps = use == ImuUse::kBridgeWholeScan ? std::vector<TimeSpan>{{start.time, t_end}}
+                                                    : imu_.gaps(start.time, t_end, config_.imu.max_gap_s);
   if (!gaps.empty()) {
-    result.status |= kStatusImuGap;
+    if (use == ImuUse::kMeasured) result.status |= kStatusImuGap;
     bridge_imu_gaps(intervals, gaps, start, last_angular_rate_, start.gravity);
   }
   ImuPreintegration preintegration(start.gyro_bias, start.accel_bias, noise_);
@@ -349,6 +351,7 @@ void LidarInertialOdometry::register_scan(const Scan& scan, const ScanFeatures& 
     hold_imu_states(prediction.covariance);
     updated = update(prediction, features, params);
     result.status |= kStatusImuInconsistent;
+    bridge_contradicting_imu(scan, indices, params, prediction, features, updated);
   }
   holds_.decide_next(weakest_translation, turning);
   state_ = updated.state;
@@ -363,6 +366,30 @@ void LidarInertialOdometry::register_scan(const Scan& scan, const ScanFeatures& 
   result.min_translation_eigenvalue = updated.min_translation_eigenvalue;
   if (updated.degenerate_directions > 0) result.status |= kStatusDegenerate;
   if (updated.residuals < 50) result.status |= kStatusFewFeatures;
+}
+
+// Either the IMU's measurements over the scan are wrong (a burst of corrupted or clipped samples)
+// or the state it started from is (a rolling start's speed). Predicted and deskewed as over an IMU
+// gap instead (the last estimated twist held, the prior widened), a scan whose measurements were
+// wrong agrees with the LiDAR, and its points, no longer deskewed with them, fit the map better;
+// then that prediction is taken.
+void LidarInertialOdometry::bridge_contradicting_imu(const Scan& scan, const ScanFeatures& indices, UpdateParams params,
+                                                     Prediction& prediction, DeskewedFeatures& features,
+                                                     UpdateResult& updated) {
+  OdometryResult unused;
+  Prediction bridged = predict(scan, unused, ImuUse::kBridgeWholeScan);
+  holds_.apply(bridged.covariance, bridged.predicted);
+  if (move_off_.active()) move_off_.restrict(params, bridged.covariance, false);
+  hold_imu_states(bridged.covariance);
+  DeskewedFeatures bridged_features = deskew(scan, indices, bridged.relative);
+  UpdateResult bridged_update = update(bridged, bridged_features, params);
+  if (!holds_.consistent(bridged_update.state, bridged.predicted, bridged.covariance) ||
+      !(bridged_update.rms_residual_m < updated.rms_residual_m)) {
+    return;
+  }
+  prediction = std::move(bridged);
+  features = std::move(bridged_features);
+  updated = bridged_update;
 }
 
 void LidarInertialOdometry::update_map(const DeskewedFeatures& features, OdometryResult& result) {

@@ -28,6 +28,11 @@ struct ImuConfig {
   double accel_bias_random_walk = 1.0e-2;  // m/s^3/sqrt(Hz): also absorbs scale and misalignment (config/liod.yaml)
   double gravity_m_s2 = 9.80665;
   double max_gap_s = 0.05;              // a longer gap marks the IMU as lost
+  /// The IMU's measurement ranges (datasheet): a sample beyond either is no measurement (a
+  /// corrupted but finite value passes an 8-bit checksum) and is dropped. Defaults: the widest
+  /// ranges of automotive MEMS units, 2000 deg/s and 16 g.
+  double gyro_range_rad_s = 34.9;
+  double accel_range_m_s2 = 157.0;
 };
 
 struct ExtrinsicsConfig {

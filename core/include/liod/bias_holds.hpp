@@ -73,6 +73,8 @@ class BiasHolds {
   void apply(StateCovariance& predicted_covariance, const NavState& predicted) const;
   /// After the update: whether it contradicts the IMU's prediction (counted).
   bool imu_contradicts(const NavState& updated, const NavState& predicted, const StateCovariance& predicted_covariance);
+  /// Whether an update agrees with a prediction (not counted).
+  bool consistent(const NavState& updated, const NavState& predicted, const StateCovariance& predicted_covariance) const;
   /// The next scan's forward hold, from this scan's weakest translation information and turn.
   void decide_next(double min_translation_eigenvalue, bool turning);
   /// A held scan's forward velocity correction (m/s, body frame) over its duration: the held

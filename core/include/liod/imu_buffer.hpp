@@ -20,10 +20,13 @@ struct TimeSpan {
 
 class ImuBuffer {
  public:
-  /// Keeps at most history_s back from the newest sample.
-  explicit ImuBuffer(double history_s) : history_s_(history_s) {}
+  /// Keeps at most history_s back from the newest sample; a sample whose angular rate or specific
+  /// force exceeds the IMU's measurement range on any axis is no measurement.
+  ImuBuffer(double history_s, double gyro_range_rad_s, double accel_range_m_s2)
+      : history_s_(history_s), gyro_range_(gyro_range_rad_s), accel_range_(accel_range_m_s2) {}
 
-  /// Adds a sample; drops (and counts) a non-finite one and one not after the newest.
+  /// Adds a sample; drops (and counts) a non-finite one, one beyond the measurement range, and
+  /// one not after the newest.
   void add(const ImuSample& sample);
   /// Forgets the samples no scan after `time` needs (one is kept before it, for interpolation).
   void forget_before(double time);
@@ -42,6 +45,8 @@ class ImuBuffer {
 
  private:
   double history_s_;
+  double gyro_range_;
+  double accel_range_;
   std::deque<ImuSample> samples_;
   std::size_t dropped_ = 0;
 };

@@ -62,7 +62,8 @@ class LidarInertialOdometry {
  public:
   explicit LidarInertialOdometry(const FrontEndConfig& config);
 
-  /// Samples must arrive in time order; out-of-order or non-finite ones are dropped (counted).
+  /// Samples must arrive in time order; out-of-order, non-finite and out-of-range ones are
+  /// dropped (counted).
   void add_imu(const ImuSample& sample) { imu_.add(sample); }
   /// Latest IMU time, or -inf before any sample.
   double latest_imu_time() const { return imu_.latest_time(); }
@@ -109,11 +110,15 @@ class LidarInertialOdometry {
   std::optional<OdometryResult> search_start(const Scan& scan, const ScanFeatures* extracted);
   /// `extracted`: the scan's features, or nullptr to extract them here.
   void process_scan(const Scan& scan, const ScanFeatures* extracted, OdometryResult& result);
-  Prediction predict(const Scan& scan, OdometryResult& result) const;
+  /// kBridgeWholeScan: the IMU's samples over the scan are not used (it contradicted the LiDAR).
+  enum class ImuUse { kMeasured, kBridgeWholeScan };
+  Prediction predict(const Scan& scan, OdometryResult& result, ImuUse use = ImuUse::kMeasured) const;
   StateCovariance propagate_covariance(const ImuPreintegration& preintegration, const NavState& start) const;
   DeskewedFeatures deskew(const Scan& scan, const ScanFeatures& indices, const PoseTable& relative) const;
   void register_scan(const Scan& scan, const ScanFeatures& indices, Prediction& prediction,
                      DeskewedFeatures& features, OdometryResult& result);
+  void bridge_contradicting_imu(const Scan& scan, const ScanFeatures& indices, UpdateParams params,
+                                Prediction& prediction, DeskewedFeatures& features, UpdateResult& updated);
   UpdateResult update(const Prediction& prediction, const DeskewedFeatures& features, const UpdateParams& params) const;
   void update_map(const DeskewedFeatures& features, OdometryResult& result);
 
