@@ -48,7 +48,7 @@ Eigen::Vector3f surface_end_shift(const Eigen::Vector3f& end, const Eigen::Vecto
   // return): moving a post's silhouette point by half of it adds noise, not accuracy. 5x the
   // face-on step is grazing below 11.5 deg (the extractor drops surface ends met under 10 deg as
   // parallel to the beam): only steep steps, such as a wall's end seen along it, are moved
-  // (docs/design.md, "Surface ends").
+  // (docs/design.md, "Surface ends at grazing incidence").
   constexpr float kMinGrazingStepRatio = 5.0F;
   constexpr float kMinExtrapolatedStepM = 0.05F;
   const float end_range = end.norm();

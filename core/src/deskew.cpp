@@ -67,8 +67,8 @@ DeskewedFeatures deskew_features(const Scan& scan, const ScanFeatures& indices, 
   // The map keeps planes denser than the queries so that each query finds a tight neighbourhood.
   out.map_planes = planes;
   // The extractor lists a voxel's candidates sharpest first, and a ring crossing an edge or bent
-  // by its range noise scores highest: the flattest is the better query (docs/design.md,
-  // "Plane queries").
+  // by its range noise scores highest: the flattest is the better query (docs/design.md, "The
+  // flattest plane query per voxel").
   if (flattest_queries) {
     out.planes = voxel_downsample_lowest(planes, plane_curvatures, params.plane_voxel_m);
   } else {

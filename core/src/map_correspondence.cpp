@@ -159,7 +159,7 @@ std::optional<LinearResidual> line_correspondence(LocalMap::NeighbourSearch& map
   if (viewpoint != nullptr) {
     // Along the ray (its part across the line): where an edge point lies across the ray depends on
     // where the beam grazed the post or corner, which moves with the viewpoint by up to the
-    // object's width and one azimuth step; its range hardly (docs/design.md, "Edges along the ray").
+    // object's width and one azimuth step; its range hardly (docs/design.md, "Edge residual along the ray").
     const auto along_ray = across_ray(across, query, *viewpoint);
     if (!along_ray) return std::nullopt;  // a ray along the line: no range to it
     normal = *along_ray;

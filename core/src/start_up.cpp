@@ -29,7 +29,7 @@ constexpr std::size_t kMaxSearchPointsPerScan = 2500;
 constexpr double kMaxSpeedSearch_s = 2.0;
 // The speed with all of the structure is decided on this scan (0 the first), from its overlap
 // and that of each scan before it with their predecessors, summed: from the first pair alone a
-// regular spacing of posts aliases (docs/design.md, "Rolling start").
+// regular spacing of posts aliases (docs/design.md, "Start-up: alignment and the rolling start's speed search").
 constexpr std::size_t kAllStructureScans = 2;
 // Below this a speed is a standstill (the rails' footprints move with the sensor and vote for one).
 constexpr double kStandstillSpeed = 1.0;

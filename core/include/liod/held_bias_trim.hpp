@@ -4,7 +4,7 @@
 // LiDAR's along-track corrections meanwhile. A held bias that is wrong shows in those corrections:
 // the IMU prediction gains or loses speed at the bias's error, and the LiDAR gives it back scan
 // after scan (a bias 0.17 m/s^2 wrong, learned at a gantry and held for 30 s, leaves the
-// speed 0.9 m/s low by its end: docs/design.md, "Bias holds"). The corrections' rate over a long held stretch is that
+// speed 0.9 m/s low by its end: docs/design.md, "Bias holds in degenerate stretches"). The corrections' rate over a long held stretch is that
 // error, and a part of it is taken off the bias: slowly, so that one scan's pull, which the hold
 // exists to keep out, does not count. The median rate, not the mean, so that the large corrections
 // of a rolling start's first scans (the speed found, not an acceleration) do not count either.
