@@ -98,6 +98,13 @@ class SpeedHypotheses {
     return sum;
   }
 
+  // Adds to each grid hypothesis's evidence the newest scan's overlap with those before it.
+  void add_newest_scan(const std::vector<double>& grid, Points points, std::vector<double>& evidence) const {
+    const std::size_t newest = structure_.size() - 1;
+    evidence.resize(grid.size(), 0.0);
+    for (std::size_t i = 0; i < grid.size(); ++i) evidence[i] += score_against_earlier(placement(grid[i]), newest, points);
+  }
+
   GridSearchResult refine(double centre, Points points) const {
     return refine_around([&](double speed) { return score_since_first(speed, points); }, centre, speed_grid());
   }
@@ -284,11 +291,7 @@ std::optional<double> StartUp::speed_from_all_structure(const SpeedHypotheses& h
   SpeedSearch& search = *search_;
   const std::vector<double> grid = coarse_grid(speed_grid());
   const std::size_t newest = search.structure.size() - 1;
-  search.evidence_all.resize(grid.size(), 0.0);
-  for (std::size_t i = 0; i < grid.size(); ++i) {
-    search.evidence_all[i] +=
-        hypotheses.score_against_earlier(hypotheses.placement(grid[i]), newest, &StructurePoints::all);
-  }
+  hypotheses.add_newest_scan(grid, &StructurePoints::all, search.evidence_all);
   if (newest != kAllStructureScans) return std::nullopt;
   const auto best = std::max_element(search.evidence_all.begin(), search.evidence_all.end());
   const GridSearchResult found =
@@ -306,11 +309,7 @@ std::optional<double> StartUp::speed_off_the_rails(const SpeedHypotheses& hypoth
   SpeedSearch& search = *search_;
   const std::vector<double> grid = coarse_grid(speed_grid());
   const std::size_t newest = search.structure.size() - 1;
-  search.evidence.resize(grid.size(), 0.0);
-  for (std::size_t i = 0; i < grid.size(); ++i) {
-    search.evidence[i] +=
-        hypotheses.score_against_earlier(hypotheses.placement(grid[i]), newest, &StructurePoints::off_lines);
-  }
+  hypotheses.add_newest_scan(grid, &StructurePoints::off_lines, search.evidence);
   if (newest < kAllStructureScans) return std::nullopt;
   const auto best = std::max_element(search.evidence.begin(), search.evidence.end());
   if (*best < kMinSpeedScore) return std::nullopt;
