@@ -244,7 +244,7 @@ TEST(BiasHolds, ApplyHoldsTheForwardAccelerationOnlyWhileHeld) {
 // A held bias 0.05 m/s^2 too large along the (diagonal) forward axis: each held 0.125 s scan the
 // LiDAR gives back the 0.05 * 0.125 m/s the prediction lost. After a 2 s window, with gain 1, the
 // whole error comes off the bias along the forward axis; not before, and a release restarts the window.
-TEST(BiasHolds, TrimTakesTheHeldBiassErrorOffAfterTheWindow) {
+TEST(BiasHolds, TrimTakesTheHeldBiasErrorOffAfterTheWindow) {
   BiasHoldConfig config = small_config();
   config.forward_axis = Eigen::Vector3d(2.0, 2.0, 0.0);
   config.trim_window_s = 2.0;
