@@ -15,6 +15,10 @@ namespace {
 // Times on a binary grid (multiples of 1/128 s), so that comparisons with them are exact.
 constexpr double kStep = 1.0 / 128.0;
 
+// An automotive MEMS unit's measurement ranges: 2000 deg/s, 16 g.
+constexpr double kGyroRange = 34.9;
+constexpr double kAccelRange = 157.0;
+
 ImuSample sample_at(double time) {
   ImuSample s;
   s.time = time;
@@ -23,7 +27,7 @@ ImuSample sample_at(double time) {
 }
 
 TEST(ImuBuffer, DropsAndCountsNonFiniteAndOutOfOrderSamples) {
-  ImuBuffer buffer(10.0);
+  ImuBuffer buffer(10.0, kGyroRange, kAccelRange);
   EXPECT_TRUE(buffer.empty());
   EXPECT_EQ(buffer.latest_time(), -std::numeric_limits<double>::infinity());
 
@@ -47,9 +51,37 @@ TEST(ImuBuffer, DropsAndCountsNonFiniteAndOutOfOrderSamples) {
   EXPECT_EQ(buffer.latest_time(), 1.5);
 }
 
+// A value beyond the measurement range on any axis is no measurement (a corrupted but finite
+// float passes an 8-bit checksum); one at the range is a clipped measurement and is kept.
+TEST(ImuBuffer, DropsSamplesBeyondTheMeasurementRange) {
+  ImuBuffer buffer(10.0, kGyroRange, kAccelRange);
+  ImuSample fast_turn = sample_at(1.0);
+  fast_turn.gyro.x() = -1.01 * kGyroRange;
+  ImuSample hard_knock = sample_at(1.1);
+  hard_knock.accel.y() = 1.0e6;
+  ImuSample clipped = sample_at(1.2);
+  clipped.gyro.z() = kGyroRange;
+  clipped.accel.x() = -kAccelRange;
+  buffer.add(fast_turn);
+  buffer.add(hard_knock);
+  buffer.add(clipped);
+  EXPECT_EQ(buffer.dropped(), 2U);
+  ASSERT_EQ(buffer.size(), 1U);
+  EXPECT_EQ(buffer.samples()[0].time, 1.2);
+}
+
+TEST(ImuBuffer, WithoutSamplesTheWholeSpanIsAGap) {
+  const ImuBuffer buffer(10.0, kGyroRange, kAccelRange);
+  const auto gaps = buffer.gaps(1.0, 1.5, 0.05);
+  ASSERT_EQ(gaps.size(), 1U);
+  EXPECT_EQ(gaps[0].from, 1.0);
+  EXPECT_EQ(gaps[0].to, 1.5);
+  EXPECT_TRUE(buffer.gaps(1.5, 1.5, 0.05).empty());
+}
+
 // With no scan to trim it, the buffer keeps history_s back from the newest sample and no more.
 TEST(ImuBuffer, KeepsHistorySecondsBackFromTheNewestSample) {
-  ImuBuffer buffer(1.0);
+  ImuBuffer buffer(1.0, kGyroRange, kAccelRange);
   for (int k = 0; k <= 5 * 128; ++k) buffer.add(sample_at(k * kStep));
   EXPECT_EQ(buffer.latest_time(), 5.0);
   EXPECT_EQ(buffer.samples().front().time, 4.0);  // the oldest within 1 s of 5.0
@@ -57,14 +89,14 @@ TEST(ImuBuffer, KeepsHistorySecondsBackFromTheNewestSample) {
   EXPECT_EQ(buffer.dropped(), 0U);
 
   // However short the history, two samples stay to interpolate between.
-  ImuBuffer short_buffer(0.0);
+  ImuBuffer short_buffer(0.0, kGyroRange, kAccelRange);
   for (int k = 0; k < 10; ++k) short_buffer.add(sample_at(k * kStep));
   EXPECT_EQ(short_buffer.size(), 2U);
   EXPECT_EQ(short_buffer.samples().back().time, 9 * kStep);
 }
 
 TEST(ImuBuffer, ForgetBeforeKeepsOneSampleBeforeTheTime) {
-  ImuBuffer buffer(100.0);
+  ImuBuffer buffer(100.0, kGyroRange, kAccelRange);
   for (int k = 0; k < 64; ++k) buffer.add(sample_at(k * kStep));
   buffer.forget_before(10.5 * kStep);
   EXPECT_EQ(buffer.samples().front().time, 10 * kStep);  // the last one before: interpolation needs it
@@ -78,7 +110,7 @@ TEST(ImuBuffer, ForgetBeforeKeepsOneSampleBeforeTheTime) {
 
 // Samples every 1/128 s over [1, 2] s with none in (1.25, 1.5).
 ImuBuffer buffer_with_hole() {
-  ImuBuffer buffer(100.0);
+  ImuBuffer buffer(100.0, kGyroRange, kAccelRange);
   for (int k = 128; k <= 256; ++k) {
     const double t = k * kStep;
     if (t > 1.25 && t < 1.5) continue;
