@@ -196,6 +196,9 @@ void declare_daemon(Schema& s, DaemonConfig& c) {
   s.boolean("pose_socket.imu_rate", &c.pose_socket.imu_rate);
   s.real("pose_socket.health_interval_s", &c.pose_socket.health_interval_s, 0.05, 3600.0);
   s.real("pose_socket.health_log_interval_s", &c.pose_socket.health_log_interval_s, 0.0, 86400.0);
+  s.real("pose_socket.max_speed_mps", &c.pose_socket.max_speed_mps, 1.0, 1000.0);
+  s.real("pose_socket.max_gyro_bias_rad_s", &c.pose_socket.max_gyro_bias_rad_s, 1e-4, 10.0);
+  s.real("pose_socket.max_accel_bias_m_s2", &c.pose_socket.max_accel_bias_m_s2, 1e-3, 100.0);
 }
 
 Schema declare_schema(Config& c) {

@@ -29,10 +29,17 @@ std::uint32_t status_flags(std::uint32_t odometry_status) {
 }
 
 std::uint32_t with_ok(std::uint32_t f) {
-  constexpr std::uint32_t kBad =
-      pose::kInitializing | pose::kDegenerate | pose::kImuLost | pose::kLidarLost | pose::kImuInconsistent;
+  constexpr std::uint32_t kBad = pose::kInitializing | pose::kDegenerate | pose::kImuLost | pose::kLidarLost |
+                                 pose::kImuInconsistent | pose::kImplausible;
   return (f & kBad) == 0 ? f | pose::kOk : f;
 }
+
+// What a scan pose passes on to the IMU-rate poses propagated from it: every flag of the scan's
+// own that kept it from `ok` (an IMU-rate pose is the scan's state moved on by the IMU, no better
+// than it). The host-time flags (IMU or LiDAR lost now, a clock step) each IMU-rate pose gets
+// afresh from live_flags.
+constexpr std::uint32_t kInheritedFlags = pose::kInitializing | pose::kDegenerate | pose::kFewFeatures |
+                                          pose::kImuLost | pose::kImuInconsistent | pose::kImplausible;
 
 void fill_state(pose::PoseMessage& m, const NavState& s) {
   m.time = s.time;
@@ -87,6 +94,7 @@ Pipeline::Pipeline(const Config& config, PipelineOptions options)
                                          bridge ? static_cast<std::int64_t>(config_.time.jump_threshold_s * 1e9) : 0);
   if (!lossless && options_.imu_rate_poses) imu_out_->on_sample = [this](const ImuItem& item) { publish_imu_pose(item); };
   if (config_.backend.enabled) backend_ = std::make_unique<BackendWorker>(config_);
+  state_limits_ = state_limits(config_);
 }
 
 Pipeline::~Pipeline() {
@@ -246,9 +254,31 @@ bool Pipeline::make_imu_pose(const ImuItem& item, PoseEvent& ev) {
   ev.message.covariance = anchor.pose_covariance;  // of the last scan update (not propagated)
   std::uint32_t f = anchor.flags;
   if (dead_reckoned_s > config_.drivers.lidar.lost_after_s) f |= pose::kLidarLost;
+  // The anchor's covariance was checked with its scan; what the IMU adds can still overflow.
+  if (check_state(*state, state_limits_) != StateFault::kNone) {
+    f |= pose::kImplausible;
+    implausible_poses_.fetch_add(1, std::memory_order_relaxed);
+  }
   ev.message.flags = with_ok(f | live_flags(state->time));
   ev.input_steady_ns = item.arrival_steady_ns;
   return true;
+}
+
+std::uint32_t Pipeline::gate_scan_state(const OdometryResult& result) {
+  StateFault fault = check_state(result.state, state_limits_);
+  if (fault == StateFault::kNone) fault = check_covariance(result.covariance);
+  const bool was_plausible = scan_state_plausible_;
+  scan_state_plausible_ = fault == StateFault::kNone;
+  if (scan_state_plausible_) {
+    if (!was_plausible) spdlog::info("odometry state plausible again at t={:.3f}", result.state.time);
+    return 0;
+  }
+  implausible_poses_.fetch_add(1, std::memory_order_relaxed);
+  if (was_plausible) {
+    spdlog::error("odometry state implausible at t={:.3f}: {} (speed {:.3g} m/s); poses published without ok",
+                  result.state.time, to_string(fault), result.state.velocity.norm());
+  }
+  return pose::kImplausible;
 }
 
 void Pipeline::publish_imu_pose(const ImuItem& item) {
@@ -303,7 +333,7 @@ void Pipeline::odometry_thread() {
     fill_state(ev.message, result->state);
     ev.message.angular_rate = last_gyro - result->state.gyro_bias;
     ev.message.covariance = pose::pose_covariance_from_state(result->covariance);
-    const std::uint32_t scan_flags = status_flags(result->status);
+    const std::uint32_t scan_flags = status_flags(result->status) | gate_scan_state(*result);
     std::uint32_t f = scan_flags | live_flags(result->state.time);
     f &= ~static_cast<std::uint32_t>(pose::kLidarLost);  // this pose comes from a scan
     if (item.clock_jump) f |= pose::kClockJump;
@@ -338,8 +368,7 @@ void Pipeline::odometry_thread() {
       // IMU-rate poses are as (un)reliable as the scan they start from: while it is initialising
       // they are flagged so; before any speed is known (the first scan) there are none: dead
       // reckoning at zero speed from a rolling start would run away.
-      const ScanAnchor anchor{result->state, odometry.gravity(), ev.message.covariance,
-                              scan_flags & (pose::kInitializing | pose::kDegenerate | pose::kFewFeatures)};
+      const ScanAnchor anchor{result->state, odometry.gravity(), ev.message.covariance, scan_flags & kInheritedFlags};
       if (lockstep) propagator_.set_anchor(anchor);
       else anchors_.publish(anchor);
     }
@@ -538,6 +567,7 @@ std::string Pipeline::health_json(HealthRates& rates) const {
     << "},\"odometry\":{\"scans\":" << scans << ",\"scan_rate_hz\":" << rate(scans, rates.scans)
     << ",\"last_process_ms\":" << last_process_ms_.load() << ",\"imu_poses_withheld\":" << imu_poses_withheld_.load()
     << ",\"imu_inconsistent_scans\":" << imu_inconsistent_scans_.load()
+    << ",\"implausible_poses\":" << implausible_poses_.load()
     << "},\"rings\":{";
   ring("scan", scan_ring_);
   j << ',';

@@ -42,6 +42,7 @@
 #include "liod/daemon/imu_rate_propagator.hpp"
 #include "liod/daemon/pose_protocol.hpp"
 #include "liod/daemon/sensor_outputs.hpp"
+#include "liod/daemon/state_gate.hpp"
 #include "liod/drivers/spsc_ring.hpp"
 #include "liod/lidar_inertial_odometry.hpp"
 #include "liod/types.hpp"
@@ -200,6 +201,8 @@ class Pipeline {
   bool make_imu_pose(const ImuItem& item, PoseEvent& ev);
   /// Live: the IMU thread's IMU-rate pose for each sample.
   void publish_imu_pose(const ImuItem& item);
+  /// pose::kImplausible when a scan's state fails the gate (state_gate.hpp), else 0; logs changes.
+  std::uint32_t gate_scan_state(const OdometryResult& result);
 
   Config config_;
   PipelineOptions options_;
@@ -233,6 +236,9 @@ class Pipeline {
   LatencyStats scan_latency_, imu_latency_, scan_receive_, scan_wait_, scan_process_, scan_publish_;
   std::atomic<std::uint64_t> socket_clients_{0}, socket_skipped_{0}, socket_dropped_{0};
   std::atomic<std::uint64_t> imu_poses_withheld_{0};  // past pose_socket.imu_rate_horizon_s
+  StateLimits state_limits_;
+  bool scan_state_plausible_ = true;                  // odometry thread only
+  std::atomic<std::uint64_t> implausible_poses_{0};   // scan and IMU-rate poses flagged implausible
   mutable std::mutex error_mutex_;
   std::string error_;
 };
