@@ -24,7 +24,6 @@ int check_config(const std::vector<std::string>& paths) {
   return 0;
 }
 
-
 // Each subcommand's options, filled by CLI11.
 struct Commands {
   CLI::App* check = nullptr;
