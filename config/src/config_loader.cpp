@@ -186,6 +186,8 @@ void declare_daemon(Schema& s, DaemonConfig& c) {
   s.integer("threads.imu_ring", &c.threads.imu_ring, 16, 1 << 20);
   s.integer("threads.pose_ring", &c.threads.pose_ring, 16, 1 << 20);
   s.integer("threads.keyframe_ring", &c.threads.keyframe_ring, 2, 65536);
+  s.real("threads.backend_max_lag_s", &c.threads.backend_max_lag_s, 0.1, 3600.0);
+  s.real("threads.backend_work_limit_s", &c.threads.backend_work_limit_s, 1.0, 3600.0);
 
 
   s.text("pose_socket.mode", &c.pose_socket.mode);

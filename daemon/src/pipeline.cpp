@@ -93,7 +93,7 @@ Pipeline::Pipeline(const Config& config, PipelineOptions options)
   imu_out_ = std::make_unique<ImuOutput>(imu_ring_, lossless, source_stop_,
                                          bridge ? static_cast<std::int64_t>(config_.time.jump_threshold_s * 1e9) : 0);
   if (!lossless && options_.imu_rate_poses) imu_out_->on_sample = [this](const ImuItem& item) { publish_imu_pose(item); };
-  if (config_.backend.enabled) backend_ = std::make_unique<BackendWorker>(config_);
+  if (config_.backend.enabled) backend_ = std::make_unique<BackendWorker>(config_, options_.backend);
   state_limits_ = state_limits(config_);
 }
 
@@ -148,7 +148,7 @@ void Pipeline::start(std::unique_ptr<LidarSource> lidar, std::unique_ptr<ImuSour
   std::unique_ptr<PoseServer> server;
   if (!options_.pose_socket.empty()) server = std::make_unique<PoseServer>(options_.pose_socket, config_.pose_socket);
   const auto now = steady_ns();
-  hb_odometry_ = hb_publisher_ = hb_backend_ = now;
+  for (Heartbeat* hb : {&hb_odometry_, &hb_publisher_, &hb_backend_}) hb->beat(now);
   auto wrap = [this](const char* name, auto body) {
     return [this, name, body]() mutable {
       try {
@@ -316,7 +316,7 @@ void Pipeline::odometry_thread() {
 
   auto process = [&](ScanItem& item) {
     const std::int64_t start_ns = steady_ns();
-    hb_odometry_.store(start_ns, std::memory_order_relaxed);
+    hb_odometry_.beat(start_ns);
     const auto result = odometry.process(item.scan, item.features);
     ++totals_.scans;
     if (!result) return;
@@ -373,7 +373,7 @@ void Pipeline::odometry_thread() {
       else anchors_.publish(anchor);
     }
     if ((result->status & kStatusKeyframe) && !odometry.keyframes().empty()) {
-      KeyframeEvent k{std::make_shared<const Keyframe>(odometry.keyframes().back()), result->covariance};
+      KeyframeEvent k{std::make_shared<const Keyframe>(odometry.keyframes().back()), result->covariance, steady_ns()};
       if (lockstep) keyframe_ring_.push_wait(k, stop_);
       else keyframe_ring_.try_push(k);
     }
@@ -385,7 +385,7 @@ void Pipeline::odometry_thread() {
 
   const std::size_t max_pending = scan_ring_.capacity();
   while (!stop_.load(std::memory_order_relaxed)) {
-    hb_odometry_.store(steady_ns(), std::memory_order_relaxed);
+    hb_odometry_.beat(steady_ns());
     bool progress = false;
     if (lockstep) {
       if (pending.empty() && scan_ring_.try_pop(spare)) {
@@ -453,7 +453,7 @@ void Pipeline::publisher_thread(PoseServer* server) {
   auto next_housekeeping = std::chrono::steady_clock::now();
   HealthRates rates;
   while (!stop_.load(std::memory_order_relaxed)) {
-    hb_publisher_.store(steady_ns(), std::memory_order_relaxed);
+    hb_publisher_.beat(steady_ns());
     fds.clear();
     fds.push_back({publisher_wakeup_.fd(), POLLIN, 0});
     if (server != nullptr) server->fill_pollfds(fds);
@@ -501,19 +501,49 @@ void Pipeline::backend_thread() {
   }
   KeyframeEvent k;
   while (!stop_.load(std::memory_order_relaxed)) {
-    hb_backend_.store(steady_ns(), std::memory_order_relaxed);
+    hb_backend_.beat(steady_ns());
     bool any = false;
     while (keyframe_ring_.try_pop(k)) {
       // Keyframes in ring order: the same sequence on every lockstep replay (deterministic).
-      if (backend_) backend_->process(*k.keyframe);
-      backend_keyframes_.fetch_add(1, std::memory_order_relaxed);
+      backend_unit(k);
       k.keyframe.reset();
       any = true;
     }
     if (keyframe_ring_.drained()) break;
     if (!any) backend_wakeup_.wait(std::chrono::milliseconds(100));
   }
-  if (backend_) backend_->finish();
+  if (backend_) {
+    hb_backend_.begin_work(steady_ns());
+    backend_->finish();
+    hb_backend_.end_work(steady_ns());
+  }
+}
+
+void Pipeline::backend_unit(const KeyframeEvent& k) {
+  backend_keyframes_.fetch_add(1, std::memory_order_relaxed);
+  if (!backend_) return;
+  const std::int64_t start = steady_ns();
+  const double waited_s = static_cast<double>(start - k.queued_steady_ns) * 1e-9;
+  // Live, a keyframe that waited this long means the backend fell behind (a loop check or solve
+  // slower than the keyframes come, a slow disk): it is skipped, loop check and all, so that the
+  // backend works on the present rather than on a growing backlog. The graph stays one chain: the
+  // next keyframe's odometry factor spans the skipped ones. Replay in lockstep waits instead.
+  if (options_.ordering != Ordering::Lockstep && waited_s > config_.threads.backend_max_lag_s) {
+    if (backend_shed_.fetch_add(1, std::memory_order_relaxed) == backend_shed_logged_) {
+      spdlog::warn("backend behind: keyframe {} waited {:.1f} s (threads.backend_max_lag_s {} s); skipping keyframes "
+                   "until it catches up",
+                   k.keyframe->id, waited_s, config_.threads.backend_max_lag_s);
+    }
+    return;
+  }
+  const std::uint64_t shed = backend_shed_.load(std::memory_order_relaxed);
+  if (shed != backend_shed_logged_) {
+    spdlog::info("backend caught up: {} keyframes skipped without a loop check so far", shed);
+    backend_shed_logged_ = shed;
+  }
+  hb_backend_.begin_work(start);
+  backend_->process(*k.keyframe);
+  hb_backend_.end_work(steady_ns());
 }
 
 std::vector<std::string> Pipeline::stalled(std::chrono::milliseconds max_age) const {
@@ -525,9 +555,10 @@ std::vector<std::string> Pipeline::stalled(std::chrono::milliseconds max_age) co
   };
   check("lidar", lidar_out_->heartbeat_ns());
   if (imu_source_) check("imu", imu_out_->heartbeat_ns());
-  check("odometry", hb_odometry_.load());
-  check("publisher", hb_publisher_.load());
-  check("backend", hb_backend_.load());
+  if (hb_odometry_.stalled(now, limit, limit)) out.emplace_back("odometry");
+  if (hb_publisher_.stalled(now, limit, limit)) out.emplace_back("publisher");
+  const auto work_limit = static_cast<std::int64_t>(config_.threads.backend_work_limit_s * 1e9);
+  if (hb_backend_.stalled(now, limit, work_limit)) out.emplace_back("backend");
   if (!error().empty()) out.emplace_back("error: " + error());
   return out;
 }
@@ -592,7 +623,8 @@ std::string Pipeline::health_json(HealthRates& rates) const {
   latency("imu_to_socket", imu_latency_);
   j << "},\"socket\":{\"clients\":" << socket_clients_.load() << ",\"skipped_messages\":"
     << socket_skipped_.load() << ",\"dropped_clients\":" << socket_dropped_.load()
-    << "},\"backend\":{\"keyframes\":" << backend_keyframes_.load() << "}}";
+    << "},\"backend\":{\"keyframes\":" << backend_keyframes_.load() << ",\"keyframes_shed\":" << backend_shed_.load()
+    << ",\"busy_s\":" << hb_backend_.busy_s(steady_ns()) << "}}";
   rates.time = now;
   rates.packets = packets;
   rates.imu = imu;

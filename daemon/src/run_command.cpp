@@ -131,6 +131,113 @@ class SignalFd {
   int fd_ = -1;
 };
 
+/// What `liod run`'s main loop does besides waiting for a signal, once per pass (100 ms): the
+/// PPS correction, host clock steps, systemd's watchdog and status, the health line in the log.
+class Supervisor {
+ public:
+  Supervisor(const Config& config, Pipeline& pipeline, std::unique_ptr<drivers::PpsDiscipline> pps)
+      : config_(config), pipeline_(pipeline), pps_(std::move(pps)),
+        jumps_(static_cast<std::int64_t>(config.time.jump_threshold_s * 1e9)) {
+    std::uint64_t watchdog_us = 0;
+    watchdog_ = ::sd_watchdog_enabled(0, &watchdog_us) > 0 && watchdog_us > 0;
+    ping_every_ = std::chrono::microseconds(watchdog_ ? watchdog_us / 2 : 1000000);
+    next_ping_ = next_stall_log_ = Clock::now();
+    next_health_ = Clock::now() + health_every();
+  }
+
+  void tick() {
+    if (pps_) pipeline_.imu_output().pps_correction_ns.store(pps_->correction_ns());
+    if (const auto step = jumps_.check(); step != 0) {
+      spdlog::warn("host clock jumped by {:.3f} s (CLOCK_REALTIME step); host-stamped times are kept continuous, poses "
+                   "flagged clock_jump for {} s",
+                   static_cast<double>(step) * 1e-9, config_.time.jump_flag_s);
+      pipeline_.note_host_clock_jump();
+    }
+    const auto now = Clock::now();
+    if (now >= next_ping_) watchdog(now);
+    if (config_.pose_socket.health_log_interval_s > 0 && now >= next_health_) {
+      next_health_ = now + health_every();
+      spdlog::info("health {}", pipeline_.health_json(rates_));
+      const std::string status = "STATUS=sweeps " + std::to_string(pipeline_.lidar_output().sweeps()) + ", IMU samples " +
+                                 std::to_string(pipeline_.imu_output().samples());
+      ::sd_notify(0, status.c_str());
+    }
+  }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  // A thread is stalled when it has not passed its loop for this long: every driver and worker
+  // loop waits at most 100 ms, and a scan takes tens of ms, so 2 s means stuck. The backend's
+  // one unit of work may take longer (threads.backend_work_limit_s, heartbeat.hpp).
+  static constexpr std::chrono::milliseconds kStallLimit{2000};
+
+  Clock::duration health_every() const {
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(config_.pose_socket.health_log_interval_s));
+  }
+
+  void watchdog(Clock::time_point now) {
+    const auto stalled = pipeline_.stalled(kStallLimit);
+    if (stalled.empty()) {
+      if (watchdog_) ::sd_notify(0, "WATCHDOG=1");
+      if (withheld_) spdlog::info("all threads progressing again; watchdog pings resumed");
+      withheld_ = false;
+      next_ping_ = now + ping_every_;
+      return;
+    }
+    // No ping: systemd's watchdog restarts us if this persists for WatchdogSec. Checked again
+    // at the next pass, so that the ping resumes the moment the thread does.
+    if (!withheld_ || now >= next_stall_log_) {
+      std::string names;
+      for (const auto& s : stalled) names += (names.empty() ? "" : ", ") + s;
+      spdlog::error("threads not progressing: {}; withholding the watchdog ping", names);
+      next_stall_log_ = now + ping_every_;
+    }
+    withheld_ = true;
+  }
+
+  const Config& config_;
+  Pipeline& pipeline_;
+  std::unique_ptr<drivers::PpsDiscipline> pps_;
+  drivers::ClockJumpDetector jumps_;
+  bool watchdog_ = false;
+  bool withheld_ = false;
+  Clock::duration ping_every_{};
+  Clock::time_point next_ping_, next_stall_log_, next_health_;
+  HealthRates rates_;
+};
+
+std::unique_ptr<drivers::PpsDiscipline> open_pps(const Config& config) {
+  if (config.time.pps_chip.empty()) return nullptr;
+  try {
+    return std::make_unique<drivers::PpsDiscipline>(config.time.pps_chip, config.time.pps_line);
+  } catch (const std::exception& e) {
+    spdlog::warn("{}; IMU stamps stay on the host clock", e.what());
+    return nullptr;
+  }
+}
+
+/// Waits for SIGTERM/SIGINT, a thread's error or the time limit; returns the exit code so far.
+int supervise(const SignalFd& signals, Pipeline& pipeline, Supervisor& supervisor, double max_seconds) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                               std::chrono::duration<double>(max_seconds));
+  for (;;) {
+    pollfd p{signals.fd(), POLLIN, 0};
+    ::poll(&p, 1, 100);
+    if ((p.revents & POLLIN) != 0) {
+      const int sig = signals.take();
+      if (sig == SIGHUP) {
+        spdlog::info("SIGHUP: configuration reload is not supported; restart the service to apply changes");
+        continue;
+      }
+      spdlog::info("signal {}: stopping", sig);
+      return 0;
+    }
+    if (!pipeline.error().empty()) return 1;
+    if (max_seconds > 0 && std::chrono::steady_clock::now() >= deadline) return 0;
+    supervisor.tick();
+  }
+}
+
 }  // namespace
 
 int run_daemon(const Config& config, const RunOptions& options) {
@@ -145,14 +252,6 @@ int run_daemon(const Config& config, const RunOptions& options) {
     throw std::runtime_error("pose socket directory " + socket_dir.string() +
                              " does not exist (systemd's RuntimeDirectory= creates /run/liod)");
   }
-  std::unique_ptr<drivers::PpsDiscipline> pps;
-  if (!config.time.pps_chip.empty()) {
-    try {
-      pps = std::make_unique<drivers::PpsDiscipline>(config.time.pps_chip, config.time.pps_line);
-    } catch (const std::exception& e) {
-      spdlog::warn("{}; IMU stamps stay on the host clock", e.what());
-    }
-  }
   PipelineOptions po;
   po.ordering = Ordering::Arrival;
   po.imu_rate_poses = config.pose_socket.imu_rate;
@@ -164,74 +263,14 @@ int run_daemon(const Config& config, const RunOptions& options) {
     pipeline.lidar_output().tap = [r](std::span<const std::uint8_t> p, std::int64_t t, std::uint16_t port) { r->packet(p, t, port); };
     pipeline.imu_output().tap = [r](const ImuSample& s) { r->sample(s); };
   }
+  Supervisor supervisor(config, pipeline, open_pps(config));
   auto lidar = make_live_lidar_source(config);
   auto imu = make_live_imu_source(config);
   spdlog::info("liod: LiDAR {}, IMU {}, poses on {}", lidar->describe(), imu ? imu->describe() : "none",
                config.output.pose_socket);
   pipeline.start(std::move(lidar), std::move(imu));
   ::sd_notify(0, "READY=1\nSTATUS=running");
-
-  std::uint64_t watchdog_us = 0;
-  const bool watchdog = ::sd_watchdog_enabled(0, &watchdog_us) > 0 && watchdog_us > 0;
-  const auto ping_every = std::chrono::microseconds(watchdog ? watchdog_us / 2 : 1000000);
-  // A thread is stalled when it has not passed its loop for this long: every driver and worker
-  // loop waits at most 100 ms, and a scan takes tens of ms, so 2 s means stuck.
-  const auto stall_limit = std::chrono::milliseconds(2000);
-  drivers::ClockJumpDetector jumps(static_cast<std::int64_t>(config.time.jump_threshold_s * 1e9));
-  auto next_ping = std::chrono::steady_clock::now();
-  auto next_log = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                          std::chrono::duration<double>(config.pose_socket.health_log_interval_s));
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                               std::chrono::duration<double>(options.max_seconds));
-  HealthRates rates;
-  int exit_code = 0;
-  for (;;) {
-    pollfd p{signals.fd(), POLLIN, 0};
-    ::poll(&p, 1, 100);
-    if ((p.revents & POLLIN) != 0) {
-      const int sig = signals.take();
-      if (sig == SIGHUP) {
-        spdlog::info("SIGHUP: configuration reload is not supported; restart the service to apply changes");
-        continue;
-      }
-      spdlog::info("signal {}: stopping", sig);
-      break;
-    }
-    if (!pipeline.error().empty()) {
-      exit_code = 1;
-      break;
-    }
-    if (options.max_seconds > 0 && std::chrono::steady_clock::now() >= deadline) break;
-    if (pps) pipeline.imu_output().pps_correction_ns.store(pps->correction_ns());
-    if (const auto step = jumps.check(); step != 0) {
-      spdlog::warn("host clock jumped by {:.3f} s (CLOCK_REALTIME step); host-stamped times are kept continuous, poses "
-                   "flagged clock_jump for {} s",
-                   static_cast<double>(step) * 1e-9, config.time.jump_flag_s);
-      pipeline.note_host_clock_jump();
-    }
-    const auto now = std::chrono::steady_clock::now();
-    if (now >= next_ping) {
-      next_ping = now + ping_every;
-      const auto stalled = pipeline.stalled(stall_limit);
-      if (stalled.empty()) {
-        if (watchdog) ::sd_notify(0, "WATCHDOG=1");
-      } else {
-        // No ping: systemd's watchdog restarts us if this persists for WatchdogSec.
-        std::string names;
-        for (const auto& s : stalled) names += (names.empty() ? "" : ", ") + s;
-        spdlog::error("threads not progressing: {}; withholding the watchdog ping", names);
-      }
-    }
-    if (config.pose_socket.health_log_interval_s > 0 && now >= next_log) {
-      next_log = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                           std::chrono::duration<double>(config.pose_socket.health_log_interval_s));
-      const std::string health = pipeline.health_json(rates);
-      spdlog::info("health {}", health);
-      const std::string status = "STATUS=sweeps " + std::to_string(pipeline.lidar_output().sweeps()) + ", IMU samples " +
-                                 std::to_string(pipeline.imu_output().samples());
-      ::sd_notify(0, status.c_str());
-    }
-  }
+  int exit_code = supervise(signals, pipeline, supervisor, options.max_seconds);
   ::sd_notify(0, "STOPPING=1");
   // Drain what the rings hold (bounded), then flush recordings: a stop loses no received data.
   const bool clean = pipeline.drain(std::chrono::milliseconds(3000));

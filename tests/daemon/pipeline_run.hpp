@@ -29,9 +29,11 @@ struct PipelineRun {
 };
 
 /// Runs `pcap` + `imu_csv` through a pipeline. `pace` 0: lockstep (as `liod replay`); > 0: live
-/// ordering at that multiple of the recorded pace. `prepare` may adjust the pipeline before start.
+/// ordering at that multiple of the recorded pace. `prepare` may adjust the pipeline before start;
+/// `poll` is called every 100 ms while it runs (as run_daemon's main loop would).
 inline PipelineRun run_pipeline(const Config& config, const std::filesystem::path& pcap, const std::filesystem::path& imu_csv,
-                                double pace, const std::function<void(PipelineOptions&)>& prepare = {}) {
+                                double pace, const std::function<void(PipelineOptions&)>& prepare = {},
+                                const std::function<void(Pipeline&)>& poll = {}) {
   PipelineOptions po;
   po.ordering = pace > 0.0 ? Ordering::Arrival : Ordering::Lockstep;
   po.realtime_threads = false;
@@ -47,7 +49,11 @@ inline PipelineRun run_pipeline(const Config& config, const std::filesystem::pat
   clock->host_start_steady_ns = steady_ns();
   pipeline.start(std::make_unique<PcapLidarSource>(pcap.string(), ports, clock),
                  std::make_unique<CsvImuSource>(imu_csv.string(), clock));
-  wait_for([&] { return pipeline.finished() || !pipeline.error().empty(); }, std::chrono::minutes(10));
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(10);
+  while (!pipeline.finished() && pipeline.error().empty() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    if (poll) poll(pipeline);
+  }
   pipeline.join();
   HealthRates rates;
   run.health = pipeline.health_json(rates);

@@ -30,6 +30,8 @@ struct ThreadsConfig {
   int imu_ring = 4096;
   int pose_ring = 4096;
   int keyframe_ring = 64;
+  double backend_max_lag_s = 5.0;      // live: a keyframe that waited longer for the backend is skipped (no loop check)
+  double backend_work_limit_s = 60.0;  // one keyframe's backend work running longer than this is a stall (watchdog)
 };
 
 struct PoseSocketConfig {

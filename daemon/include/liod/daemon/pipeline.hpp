@@ -39,6 +39,7 @@
 
 #include "liod/config.hpp"
 #include "liod/daemon/backend_worker.hpp"
+#include "liod/daemon/heartbeat.hpp"
 #include "liod/daemon/imu_rate_propagator.hpp"
 #include "liod/daemon/pose_protocol.hpp"
 #include "liod/daemon/sensor_outputs.hpp"
@@ -76,6 +77,7 @@ struct PoseEvent {
 struct KeyframeEvent {
   std::shared_ptr<const Keyframe> keyframe;
   StateCovariance covariance = StateCovariance::Zero();
+  std::int64_t queued_steady_ns = 0;  ///< when the odometry handed it to the backend
 };
 
 enum class Ordering { Arrival, Lockstep };
@@ -129,6 +131,8 @@ struct PipelineOptions {
   /// Live sources (Arrival ordering): take steps of the LiDAR's and the IMU's time out
   /// (drivers::ClockStepBridge). Not for file replays: they play a recording as it is.
   bool bridge_clock_steps = false;
+  /// Handed to the BackendWorker (tests: a slow backend).
+  BackendWorkerOptions backend;
 };
 
 /// Totals for the replay summary (valid after join()).
@@ -165,7 +169,9 @@ class Pipeline {
   /// algorithm's results (backend()) once the threads have been joined.
   BackendWorker* backend() { return backend_.get(); }
 
-  /// Thread names whose heartbeat is older than `max_age`; empty = healthy.
+  /// Thread names whose heartbeat is older than `max_age`, or (the backend) whose current unit
+  /// of work has run longer than threads.backend_work_limit_s (heartbeat.hpp); empty = healthy.
+  /// This is what `liod run` pings systemd's watchdog on.
   std::vector<std::string> stalled(std::chrono::milliseconds max_age) const;
   /// The health JSON (rates since the previous call by the same caller are not kept: counters).
   std::string health_json(HealthRates& rates) const;
@@ -191,6 +197,8 @@ class Pipeline {
   void odometry_thread();
   void publisher_thread(PoseServer* server);
   void backend_thread();
+  /// One keyframe on the backend thread: its loop search, solve and state files, or shed.
+  void backend_unit(const KeyframeEvent& k);
   void apply_thread_config(const ThreadConfig& tc, const char* name);
   void fail(const std::string& what);
   void push_pose(PoseEvent& ev);
@@ -226,7 +234,7 @@ class Pipeline {
   std::vector<std::thread> threads_;
   int thread_count_ = 0;
   std::atomic<int> finished_threads_{0};
-  std::atomic<std::int64_t> hb_odometry_{0}, hb_publisher_{0}, hb_backend_{0};
+  Heartbeat hb_odometry_, hb_publisher_, hb_backend_;
   std::atomic<bool> imu_done_{false};
   OdometryTotals totals_;
   std::atomic<std::uint64_t> scans_processed_{0}, backend_keyframes_{0}, host_jumps_{0}, odometry_imu_dropped_{0};
@@ -239,6 +247,8 @@ class Pipeline {
   StateLimits state_limits_;
   bool scan_state_plausible_ = true;                  // odometry thread only
   std::atomic<std::uint64_t> implausible_poses_{0};   // scan and IMU-rate poses flagged implausible
+  std::atomic<std::uint64_t> backend_shed_{0};        // keyframes the backend skipped, behind
+  std::uint64_t backend_shed_logged_ = 0;             // backend thread only
   mutable std::mutex error_mutex_;
   std::string error_;
 };
