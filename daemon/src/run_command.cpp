@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <ostream>
@@ -25,23 +26,39 @@ namespace liod {
 namespace {
 
 /// Writes what the drivers receive, off their threads: the taps only copy into SPSC rings (a
-/// full ring drops and counts, never stalls a driver), and this thread does the file I/O.
+/// full ring drops and counts, never stalls a driver), and this thread does the file I/O. A
+/// write that fails (a full disk) stops the recording only: logged, counted, and reported by
+/// failed() so that `liod record` exits non-zero; the daemon runs on.
 class Recorder {
  public:
   explicit Recorder(const std::filesystem::path& dir)
       : pcap_(dir / "lidar.pcap"), imu_(dir / "imu.csv"), packets_(8192, &wakeup_), samples_(8192, &wakeup_),
         thread_([this] { run(); }) {}
-  ~Recorder() {
+  ~Recorder() { finish(); }
+  Recorder(const Recorder&) = delete;
+  Recorder& operator=(const Recorder&) = delete;
+
+  /// Stops the writer thread, flushes the files and logs the totals; false when the recording
+  /// is incomplete (a write failed).
+  bool finish() {
+    if (finished_) return !failed();
+    finished_ = true;
     stop_.store(true);
     wakeup_.notify();
     thread_.join();
-    pcap_.flush();
-    imu_.flush();
-    spdlog::info("record: {} packets, {} IMU samples written; {} packets and {} samples dropped (disk too slow)",
-                 packets_written_, samples_written_, packets_.drops(), samples_.drops());
+    if (!failed()) guarded([this] {
+      pcap_.flush();
+      imu_.flush();
+    });
+    spdlog::log(failed() ? spdlog::level::err : spdlog::level::info,
+                "record: {} packets, {} IMU samples written; {} packets and {} samples dropped (disk too slow), {} "
+                "non-finite samples not written{}",
+                packets_written_, samples_written_, packets_.drops(), samples_.drops(), non_finite_samples_,
+                failed() ? "; recording stopped early: " + error_ : std::string());
+    return !failed();
   }
   void packet(std::span<const std::uint8_t> payload, std::int64_t time_ns, std::uint16_t dst_port) {
-    if (payload.size() > kMaxPayload) return;
+    if (payload.size() > kMaxPayload || failed_.load(std::memory_order_relaxed)) return;
     item_.time_ns = time_ns;
     item_.dst_port = dst_port;
     item_.length = static_cast<std::uint16_t>(payload.size());
@@ -49,9 +66,12 @@ class Recorder {
     packets_.try_push(item_);
   }
   void sample(const ImuSample& s) {
+    if (failed_.load(std::memory_order_relaxed)) return;
     ImuSample copy = s;
     samples_.try_push(copy);
   }
+  /// A write failed; the recording ended there.
+  bool failed() const noexcept { return failed_.load(); }
 
  private:
   static constexpr std::size_t kMaxPayload = 1500;
@@ -61,30 +81,52 @@ class Recorder {
     std::uint16_t length = 0;
     std::array<std::uint8_t, kMaxPayload> data{};
   };
-  void run() {
+  /// Runs a write; a failure ends the recording (the writers throw on any I/O error).
+  template <typename Write>
+  bool guarded(Write&& write) {
+    try {
+      write();
+      return true;
+    } catch (const std::exception& e) {
+      error_ = e.what();
+      failed_.store(true);
+      spdlog::error("record: {}; recording stopped (the daemon runs on)", error_);
+      return false;
+    }
+  }
+  bool write_pending() {
     Packet p;
     ImuSample s;
-    for (;;) {
-      bool any = false;
-      while (packets_.try_pop(p)) {
-        drivers::UdpDatagram d;
-        d.capture_time_ns = p.time_ns;
-        d.src_ip = 0xC0A801C8;  // 192.168.1.200, the sensor's factory address (the source is not kept)
-        d.dst_ip = 0xC0A80166;  // 192.168.1.102
-        d.src_port = p.dst_port;
-        d.dst_port = p.dst_port;
-        d.payload = std::span<const std::uint8_t>(p.data.data(), p.length);
-        pcap_.write(d);
-        ++packets_written_;
-        any = true;
+    bool any = false;
+    while (packets_.try_pop(p)) {
+      drivers::UdpDatagram d;
+      d.capture_time_ns = p.time_ns;
+      d.src_ip = 0xC0A801C8;  // 192.168.1.200, the sensor's factory address (the source is not kept)
+      d.dst_ip = 0xC0A80166;  // 192.168.1.102
+      d.src_port = p.dst_port;
+      d.dst_port = p.dst_port;
+      d.payload = std::span<const std::uint8_t>(p.data.data(), p.length);
+      if (!guarded([&] { pcap_.write(d); })) return false;
+      ++packets_written_;
+      any = true;
+    }
+    while (samples_.try_pop(s)) {
+      any = true;
+      // The IMU log's reader refuses NaN and infinity (as the odometry does): such a sample
+      // from a driver is left out, not a reason to stop recording.
+      if (!s.gyro.allFinite() || !s.accel.allFinite() || !std::isfinite(s.time)) {
+        ++non_finite_samples_;
+        continue;
       }
-      while (samples_.try_pop(s)) {
-        imu_.write(s);
-        ++samples_written_;
-        any = true;
-      }
-      if (!any) {
-        if (stop_.load()) return;
+      if (!guarded([&] { imu_.write(s); })) return false;
+      ++samples_written_;
+    }
+    return any;
+  }
+  void run() {
+    while (!failed()) {
+      if (!write_pending()) {
+        if (failed() || stop_.load()) return;
         wakeup_.wait(std::chrono::milliseconds(100));
       }
     }
@@ -96,7 +138,10 @@ class Recorder {
   drivers::SpscRing<ImuSample> samples_;
   Packet item_;
   std::atomic<bool> stop_{false};
-  std::uint64_t packets_written_ = 0, samples_written_ = 0;
+  std::atomic<bool> failed_{false};
+  bool finished_ = false;
+  std::string error_;  // written by the recorder thread before failed_, read after the join
+  std::uint64_t packets_written_ = 0, samples_written_ = 0, non_finite_samples_ = 0;
   std::thread thread_;
 };
 
@@ -275,8 +320,8 @@ int run_daemon(const Config& config, const RunOptions& options) {
   // Drain what the rings hold (bounded), then flush recordings: a stop loses no received data.
   const bool clean = pipeline.drain(std::chrono::milliseconds(3000));
   if (!clean) spdlog::warn("some threads did not drain within 3 s; stopped them");
-  recorder.reset();
-  if (!pipeline.error().empty()) exit_code = 1;
+  const bool recording_complete = !recorder || recorder->finish();
+  if (!pipeline.error().empty() || !recording_complete) exit_code = 1;
   spdlog::info("liod stopped ({} scans with a pose, {} keyframes to the backend)", pipeline.totals().processed,
                pipeline.keyframes_received());
   return exit_code;
