@@ -2,7 +2,6 @@
 // leave memory once written to the spill and come back bit for bit when asked for.
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cstring>
 #include <filesystem>
@@ -11,6 +10,7 @@
 
 #include "liod/backend/keyframe_store.hpp"
 #include "liod/backend/map_store.hpp"
+#include "scratch_dir.hpp"
 
 namespace {
 
@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 using namespace liod;
 
 fs::path scratch_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("liod_keyframe_store_" + name + "_" + std::to_string(::getpid()));
+  const fs::path dir = liod::test::program_scratch_dir() / name;
   fs::remove_all(dir);
   return dir;
 }

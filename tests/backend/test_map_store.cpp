@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "liod/backend/map_store.hpp"
+#include "scratch_dir.hpp"
 
 namespace {
 
@@ -21,7 +22,7 @@ namespace fs = std::filesystem;
 using namespace liod;
 
 fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("liod_backend_test_" + name + "_" + std::to_string(::getpid()));
+  const fs::path dir = liod::test::program_scratch_dir() / name;
   fs::remove_all(dir);
   return dir;
 }

@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "liod/config.hpp"
+#include "scratch_dir.hpp"
 
 namespace {
 
@@ -18,7 +19,7 @@ std::string error_of(const std::string& yaml) {
 }
 
 std::filesystem::path write_temp(const std::string& name, const std::string& text) {
-  const auto path = std::filesystem::temp_directory_path() / name;
+  const auto path = liod::test::program_scratch_dir() / name;
   std::ofstream(path) << text;
   return path;
 }

@@ -276,7 +276,7 @@ TEST(CanImu, TableProfileEndiannessSignScale) {
 TEST(CanImu, ThroughVcanWhereAllowed) {
   const std::string name = "vcanliod" + std::to_string(::getpid() % 1000);
   const std::string add = "ip link add dev " + name + " type vcan 2>/dev/null && ip link set up " + name + " 2>/dev/null";
-  if (std::system(add.c_str()) != 0) GTEST_SKIP() << "cannot create a vcan interface here (needs root and the vcan module)";
+  LIOD_SKIP_UNLESS(std::system(add.c_str()) == 0, "cannot create a vcan interface here (needs root and the vcan module)");
   struct Cleanup {
     std::string n;
     ~Cleanup() { std::system(("ip link del " + n + " 2>/dev/null").c_str()); }

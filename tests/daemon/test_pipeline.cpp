@@ -292,7 +292,7 @@ class LiveDaemon {
 // `liod run` fed at the given pace; its scan poses compared with the replay's.
 void live_matches_replay(double pace) {
   LIOD_REQUIRE_SIM_DRIVE(drive);
-  if (!std::filesystem::exists(test::binary_dir() / "bin" / "liod")) GTEST_SKIP() << "liod binary not built";
+  LIOD_REQUIRE_PROGRAM("liod");
   const auto ref = read_tum(reference_replay(*drive) / "scan.tum");
   ASSERT_FALSE(ref.empty());
   LiveDaemon live(*drive, "live" + std::to_string(static_cast<int>(pace)), pace, pace > 1 ? 1 : 0);
@@ -332,7 +332,7 @@ TEST(LiveVsReplay, FiveTimesPace) { live_matches_replay(5.0); }
 // poses of the source drive.
 TEST(Record, RecordingReplaysToTheSourcePoses) {
   LIOD_REQUIRE_SIM_DRIVE(drive);
-  if (!std::filesystem::exists(test::binary_dir() / "bin" / "liod")) GTEST_SKIP() << "liod binary not built";
+  LIOD_REQUIRE_PROGRAM("liod");
   const auto& ref = reference_replay(*drive);
   const std::size_t ref_scans = read_tum(ref / "scan.tum").size();
   const test::ScratchDir rec("recording");

@@ -22,7 +22,8 @@ TEST(SystemdUnit, HasTheRequiredSettings) {
 }
 
 TEST(SystemdUnit, SystemdAnalyzeVerify) {
-  if (std::system("command -v systemd-analyze >/dev/null 2>&1") != 0) GTEST_SKIP() << "systemd-analyze not installed";
+  LIOD_SKIP_UNLESS(std::system("command -v systemd-analyze >/dev/null 2>&1") == 0, "systemd-analyze not installed");
+  LIOD_REQUIRE_PROGRAM("liod");
   // The unit names /usr/bin/liod; verify checks that ExecStart's binary exists, so verify a copy
   // pointing at the build tree's binary.
   const liod::test::ScratchDir dir("unit");

@@ -38,7 +38,7 @@ Config helios16p_config(std::uint16_t msop, std::uint16_t difop) {
 
 void udp_same_sweeps(double pace) {
   const auto pcap = test::shared_dir() / "data/robosense/helios16p_5rev.pcap";
-  if (!std::filesystem::exists(pcap)) GTEST_SKIP() << "shared data not found at " << test::shared_dir();
+  LIOD_REQUIRE_SHARED(pcap);
   const auto port = static_cast<std::uint16_t>(40000 + (::getpid() % 5000) * 4 + (pace > 1 ? 2 : 0));
   const Config config = helios16p_config(port, static_cast<std::uint16_t>(port + 1));
 

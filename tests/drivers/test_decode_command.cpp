@@ -11,7 +11,7 @@ namespace {
 
 TEST(DecodeCommand, DecodesTheReal16PCaptureIntoPcdFiles) {
   const auto pcap = drivers::test::robosense_dir() / "helios16p_5rev.pcap";
-  if (!std::filesystem::exists(pcap)) GTEST_SKIP() << "shared data not found at " << pcap;
+  LIOD_REQUIRE_SHARED(pcap);
   drivers::test::TempDir dir;
   DecodeOptions o;
   o.pcap = pcap.string();

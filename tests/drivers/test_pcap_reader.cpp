@@ -54,7 +54,7 @@ std::vector<Datagram> synthetic_datagrams(std::size_t n) {
 
 TEST(PcapReader, ReadsTheRealHelios16PCapture) {
   const auto path = test::robosense_dir() / "helios16p_5rev.pcap";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << "shared data not found at " << path;
+  LIOD_REQUIRE_SHARED(path);
   PcapReader reader(path);
   const auto all = read_all(reader);
   EXPECT_EQ(reader.format(), CaptureFormat::Pcap);
@@ -206,7 +206,7 @@ TEST(PcapReader, CountsFragmentsNonUdpNonIpv4AndSnaplenCuts) {
 
 TEST(PcapReader, FileCutMidRecordYieldsTheGoodRecordsAndReportsTheCut) {
   const auto path = test::robosense_dir() / "helios16p_5rev.pcap";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << "shared data not found at " << path;
+  LIOD_REQUIRE_SHARED(path);
   const auto bytes = test::read_bytes(path);
   test::TempDir dir;
   // 24-byte header, then 16 + 1290 bytes per record: cut inside record 100's data, then inside a

@@ -54,7 +54,7 @@ TEST(PcdIo, BinaryScanRoundTrips) {
 
 TEST(PcdIo, ReadsTheReferenceHelios32Clouds) {
   const auto dir = test::robosense_dir() / "helios32_decoded";
-  if (!std::filesystem::exists(dir)) GTEST_SKIP() << "shared data not found at " << dir;
+  LIOD_REQUIRE_SHARED(dir);
   const auto pts = read_pcd_points(dir / "1691141763462381376.pcd");
   ASSERT_EQ(pts.size(), 37508U);  // README: 37,508 returns in the first scan
   // First row: 0.23427171 -0.013176575 0.046219546 6 3 30 376 1303 0.205 1483229792

@@ -17,10 +17,7 @@ namespace {
 
 std::filesystem::path pcap_path() { return test::robosense_dir() / "helios16p_5rev.pcap"; }
 
-#define REQUIRE_SHARED_DATA()                                                                 \
-  if (!std::filesystem::exists(pcap_path()))                                                  \
-  GTEST_SKIP() << "shared RoboSense data not found at " << test::robosense_dir()              \
-               << " (tests that need ../shared skip outside the development tree)"
+#define REQUIRE_SHARED_DATA() LIOD_REQUIRE_SHARED(pcap_path())
 
 std::vector<Scan> decode_16p(HeliosOptions options) {
   std::vector<Scan> sweeps;

@@ -17,11 +17,12 @@
 #include "liod/drivers/pcap_writer.hpp"
 #include "liod/drivers/rs_helios_model.hpp"
 #include "scratch_dir.hpp"
+#include "test_env.hpp"
 
 namespace liod::drivers::test {
 
-inline std::filesystem::path shared_dir() { return std::filesystem::path(LIOD_SHARED_DIR); }
-inline std::filesystem::path robosense_dir() { return shared_dir() / "data" / "robosense"; }
+using liod::test::robosense_dir;
+using liod::test::shared_dir;
 
 struct SyntheticBlock {
   std::uint16_t azimuth = 0;

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "liod/eval/trajectory.hpp"
+#include "scratch_dir.hpp"
 
 namespace liod::eval::test {
 
@@ -41,11 +42,9 @@ inline Poses wiggly(std::size_t n, double step = 1.0) {
   return out;
 }
 
-/// Writes text to a fresh file in the test's temporary folder and returns its path.
+/// Writes text to a fresh file in the test program's scratch directory and returns its path.
 inline std::string write_temp(const std::string& name, const std::string& text) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "liod_eval_test";
-  std::filesystem::create_directories(dir);
-  const std::filesystem::path path = dir / name;
+  const std::filesystem::path path = ::liod::test::program_scratch_dir() / name;
   std::ofstream(path) << text;
   return path.string();
 }

@@ -1,75 +1,23 @@
 #include "fault_drive.hpp"
 
-#include <fcntl.h>
-#include <sys/file.h>
-#include <unistd.h>
-
-#include <cstdlib>
-#include <fstream>
 #include <map>
 #include <memory>
-#include <sstream>
 #include <string>
 
 #include "liod/eval/io.hpp"
+#include "simulated_drive.hpp"
 
 namespace liod::test {
 namespace {
 
-/// Holds an exclusive lock on a file for its lifetime: one process generates, the others wait.
-class FileLock {
- public:
-  explicit FileLock(const std::filesystem::path& path) : fd_(::open(path.c_str(), O_RDWR | O_CREAT, 0644)) {
-    if (fd_ >= 0) ::flock(fd_, LOCK_EX);
-  }
-  ~FileLock() {
-    if (fd_ >= 0) ::close(fd_);  // releases the lock
-  }
-  FileLock(const FileLock&) = delete;
-  FileLock& operator=(const FileLock&) = delete;
-
- private:
-  int fd_;
-};
-
-std::string read_text(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-/// True when `dir` holds a complete drive made by this liod-sim with these arguments.
-bool up_to_date(const std::filesystem::path& dir, const std::filesystem::path& sim, const std::string& arguments) {
-  const auto stamp = dir / "complete";
-  return std::filesystem::exists(stamp) && read_text(stamp) == arguments &&
-         std::filesystem::last_write_time(stamp) > std::filesystem::last_write_time(sim);
-}
-
-bool generate(const std::filesystem::path& dir, const std::filesystem::path& sim, const std::string& arguments) {
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  const std::string cmd = "timeout 600 " + sim.string() + " " + arguments + " --quiet --out " + dir.string() + " > " +
-                          (dir / "sim.log").string() + " 2>&1";
-  if (std::system(cmd.c_str()) != 0) return false;
-  std::ofstream(dir / "complete") << arguments;
-  return true;
-}
-
-/// The drive liod-sim makes with `arguments`, in test-data/`name`, or null without liod-sim.
+/// The drive liod-sim makes with `arguments`, in test-data/`name` (shared by the test processes,
+/// see simulated_drive.hpp), or null when liod-sim is not built or failed.
 const FaultDrive* simulated_drive(const std::string& name, const std::string& arguments) {
   static std::map<std::string, std::unique_ptr<FaultDrive>> drives;  // null: tried and failed
   if (const auto it = drives.find(name); it != drives.end()) return it->second.get();
   auto& drive = drives[name];
-  const std::filesystem::path binary_dir = LIOD_BINARY_DIR;
-  const auto sim = binary_dir / "bin" / "liod-sim";
-  if (!std::filesystem::exists(sim)) return nullptr;
-  const auto dir = binary_dir / "test-data" / name;
-  std::filesystem::create_directories(dir.parent_path());
-  {
-    FileLock lock(dir.parent_path() / (name + ".lock"));
-    if (!up_to_date(dir, sim, arguments) && !generate(dir, sim, arguments)) return nullptr;
-  }
+  const auto dir = cached_drive_dir(name, arguments);
+  if (dir.empty()) return nullptr;
   auto d = std::make_unique<FaultDrive>();
   d->dir = dir;
   d->recording = fault::read_recording(dir / "lidar.pcap", dir / "imu.csv");

@@ -24,6 +24,7 @@
 #include "liod/eval/evaluate.hpp"
 #include "liod/eval/io.hpp"
 #include "scratch_dir.hpp"
+#include "test_env.hpp"
 
 namespace {
 
@@ -37,7 +38,7 @@ const liod::test::ScratchDir& drive_dir() {
 bool make_drive() {
   static int made = -1;
   if (made < 0) {
-    const fs::path sim = fs::path(LIOD_BINARY_DIR) / "bin" / "liod-sim";
+    const fs::path sim = liod::test::sim_program();
     const std::string cmd = sim.string() + " --quiet --route urban --seed 2 --duration 30 --max-speed 12 --out " +
                             drive_dir().string() + " > /dev/null 2>&1";
     made = fs::exists(sim) && std::system(cmd.c_str()) == 0 ? 1 : 0;
@@ -97,10 +98,8 @@ Replayed replay(const fs::path& imu, const std::string& name) {
 }
 
 TEST(ImuPlausibility, AbsurdSamplesCostAtMostTheScansTheyTouch) {
-  if (!make_drive()) {
-    if (std::getenv("CI") != nullptr) FAIL() << "liod-sim is not built in " << LIOD_BINARY_DIR << "/bin";
-    GTEST_SKIP() << "liod-sim not built in " << LIOD_BINARY_DIR << "/bin (build target liod-sim)";
-  }
+  LIOD_REQUIRE_SIM();
+  ASSERT_TRUE(make_drive()) << "liod-sim failed to make the drive";
   const Replayed clean = replay(drive_dir() / "imu.csv", "clean");
   // One sample (the log is at 200 Hz: a 4 ms window holds exactly one).
   const Replayed one = replay(edited_imu("one.csv", 15.0, 15.004, 1.0e6), "one");

@@ -13,6 +13,7 @@
 #include "liod/iterated_update.hpp"
 #include "liod/so3.hpp"
 #include "liod/voxel_grid.hpp"
+#include "test_env.hpp"
 
 namespace {
 
@@ -62,7 +63,7 @@ BodyFeatures features_of(const liod::Scan& scan, const liod::FeatureParams& para
 }
 
 TEST(RealHelios32, ConsecutiveScansRegisterWithSmallMotion) {
-  if (!fs::exists(kDir)) GTEST_SKIP() << "shared data not found at " << kDir << " (run from a checkout beside shared/)";
+  LIOD_REQUIRE_SHARED(kDir);
   std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(kDir)) files.push_back(e.path());
   std::sort(files.begin(), files.end());

@@ -2,7 +2,6 @@
 // Shared helpers of the simulator tests: scratch directories, short runs, file reading.
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -11,26 +10,18 @@
 #include <vector>
 
 #include "liod/sim/simulator.hpp"
+#include "scratch_dir.hpp"
+#include "test_env.hpp"
 
 namespace liod::sim::test {
 
-inline std::string angles_csv() {
-  return std::string(LIOD_SHARED_DIR) + "/data/robosense/helios32_angles.csv";
-}
+inline std::string angles_csv() { return (::liod::test::robosense_dir() / "helios32_angles.csv").string(); }
 
-inline bool have_shared() { return std::filesystem::exists(angles_csv()); }
+#define LIOD_SIM_REQUIRE_SHARED() LIOD_REQUIRE_SHARED(::liod::sim::test::angles_csv())
 
-#define LIOD_SIM_REQUIRE_SHARED()                                                     \
-  do {                                                                                \
-    if (!::liod::sim::test::have_shared()) {                                          \
-      GTEST_SKIP() << "shared data not found at " << ::liod::sim::test::angles_csv(); \
-    }                                                                                 \
-  } while (0)
-
-/// A fresh directory under the build tree, removed and recreated.
+/// A fresh, empty directory `name` in the test program's scratch directory.
 inline std::string scratch_dir(const std::string& name) {
-  const std::filesystem::path p = std::filesystem::path(LIOD_BINARY_DIR) / "test-sim-tmp" /
-                                  (name + "-" + std::to_string(::getpid()));
+  const std::filesystem::path p = ::liod::test::program_scratch_dir() / name;
   std::filesystem::remove_all(p);
   std::filesystem::create_directories(p);
   return p.string();

@@ -97,9 +97,7 @@ int run_cli(const std::string& args) {
 
 TEST(SimCli, RejectsBadInputWithNonZeroExit) {
   LIOD_SIM_REQUIRE_SHARED();
-  if (!std::filesystem::exists(std::string(LIOD_BINARY_DIR) + "/bin/liod-sim")) {
-    GTEST_SKIP() << "liod-sim not built";
-  }
+  LIOD_REQUIRE_PROGRAM("liod-sim");
   const std::string dir = scratch_dir("cli");
   EXPECT_NE(run_cli("--route mars --seed 1 --duration 1 --out " + dir), 0);
   EXPECT_NE(run_cli("--route urban --seed 1 --duration -1 --out " + dir), 0);

@@ -44,4 +44,11 @@ class ScratchDir {
   std::filesystem::path path_;
 };
 
+/// The test program's own scratch directory, removed when the program exits: where helpers that
+/// hand out files or directories by name put them.
+inline const ScratchDir& program_scratch_dir() {
+  static const ScratchDir dir("program");
+  return dir;
+}
+
 }  // namespace liod::test
