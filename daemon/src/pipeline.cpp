@@ -292,154 +292,184 @@ void Pipeline::push_pose(PoseEvent& ev) {
   else pose_ring_.try_push(ev);
 }
 
-void Pipeline::odometry_thread() {
-  apply_thread_config(config_.threads.odometry, "liod-odometry");
-  LidarInertialOdometry odometry(config_);
-  const bool lockstep = options_.ordering == Ordering::Lockstep;
-  const bool imu_poses = options_.imu_rate_poses;
-  const auto imu_wait_ns = static_cast<std::int64_t>(config_.time.imu_wait_s * 1e9);
+namespace {
+
+// What a scan's result says of its processing, for the scan log.
+ScanDiagnostics scan_diagnostics(const OdometryResult& result, double features_ms) {
+  ScanDiagnostics d;
+  d.status = result.status;
+  d.points = result.points;
+  d.edges = result.edge_features;
+  d.planes = result.plane_features;
+  d.residuals = result.residuals;
+  d.iterations = result.iterations;
+  d.rms_m = result.rms_residual_m;
+  d.min_eigenvalue = result.min_translation_eigenvalue;
+  d.hausdorff_m = result.hausdorff_m;
+  d.deskew_ms = result.deskew_ms;
+  d.features_ms = features_ms;
+  d.registration_ms = result.registration_ms;
+  d.map_ms = result.map_ms;
+  const Eigen::Matrix3d world_to_body = result.state.rotation.transpose();
+  d.velocity_body = world_to_body * result.state.velocity;
+  d.velocity_correction_body = result.velocity_correction_body;
+  d.accel_bias = result.state.accel_bias;
+  d.gyro_bias = result.state.gyro_bias;
+  d.gravity_body = world_to_body * result.state.gravity;
+  d.forward_hold = result.forward_hold;
+  return d;
+}
+
+}  // namespace
+
+// The odometry thread's state between its steps.
+struct Pipeline::OdometryLoop {
+  explicit OdometryLoop(const Config& config) : odometry(config) {}
+  LidarInertialOdometry odometry;
+  bool lockstep = false;
+  bool imu_poses = false;
+  std::int64_t imu_wait_ns = 0;
   std::deque<ScanItem> pending;
   ScanItem spare;
   ImuItem held;
   bool have_held = false;
   Eigen::Vector3d last_gyro = Eigen::Vector3d::Zero();
   PoseEvent imu_event;
-
-  auto feed = [&](const ImuItem& item) {
-    odometry.add_imu(item.sample);
-    ++totals_.imu_fed;
-    odometry_imu_dropped_.store(odometry.dropped_imu_samples(), std::memory_order_relaxed);
-    last_gyro = item.sample.gyro;
-    // Live, the IMU thread makes the IMU-rate poses (publish_imu_pose).
-    if (lockstep && imu_poses && make_imu_pose(item, imu_event)) push_pose(imu_event);
-  };
-
-  auto process = [&](ScanItem& item) {
-    const std::int64_t start_ns = steady_ns();
-    hb_odometry_.beat(start_ns);
-    const auto result = odometry.process(item.scan, item.features);
-    ++totals_.scans;
-    if (!result) return;
-    ++totals_.processed;
-    scans_processed_.fetch_add(1, std::memory_order_relaxed);
-    const double ms = result->deskew_ms + item.features_ms + result->registration_ms;
-    totals_.front_end_ms.push_back(ms);
-    last_process_ms_.store(ms + result->map_ms, std::memory_order_relaxed);
-    if (result->status & kStatusDegenerate) ++totals_.degenerate;
-    if (result->status & kStatusImuInconsistent) imu_inconsistent_scans_.fetch_add(1, std::memory_order_relaxed);
-    if (result->status & kStatusKeyframe) ++totals_.keyframes;
-    PoseEvent ev;
-    ev.message.type = pose::MessageType::ScanPose;
-    fill_state(ev.message, result->state);
-    ev.message.angular_rate = last_gyro - result->state.gyro_bias;
-    ev.message.covariance = pose::pose_covariance_from_state(result->covariance);
-    const std::uint32_t scan_flags = status_flags(result->status) | gate_scan_state(*result);
-    std::uint32_t f = scan_flags | live_flags(result->state.time);
-    f &= ~static_cast<std::uint32_t>(pose::kLidarLost);  // this pose comes from a scan
-    if (item.clock_jump) f |= pose::kClockJump;
-    ev.message.flags = with_ok(f);
-    auto& d = ev.diagnostics;
-    d.status = result->status;
-    d.points = result->points;
-    d.edges = result->edge_features;
-    d.planes = result->plane_features;
-    d.residuals = result->residuals;
-    d.iterations = result->iterations;
-    d.rms_m = result->rms_residual_m;
-    d.min_eigenvalue = result->min_translation_eigenvalue;
-    d.hausdorff_m = result->hausdorff_m;
-    d.deskew_ms = result->deskew_ms;
-    d.features_ms = item.features_ms;
-    d.registration_ms = result->registration_ms;
-    d.map_ms = result->map_ms;
-    const Eigen::Matrix3d world_to_body = result->state.rotation.transpose();
-    d.velocity_body = world_to_body * result->state.velocity;
-    d.velocity_correction_body = result->velocity_correction_body;
-    d.accel_bias = result->state.accel_bias;
-    d.gyro_bias = result->state.gyro_bias;
-    d.gravity_body = world_to_body * result->state.gravity;
-    d.forward_hold = result->forward_hold;
-    ev.input_steady_ns = item.ready_steady_ns - item.queued_ns;
-    ev.queued_ns = item.queued_ns;
-    ev.process_start_ns = start_ns;
-    ev.process_end_ns = steady_ns();
-    push_pose(ev);
-    if (imu_poses && !(result->status & kStatusSpeedUnknown)) {
-      // IMU-rate poses are as (un)reliable as the scan they start from: while it is initialising
-      // they are flagged so; before any speed is known (the first scan) there are none: dead
-      // reckoning at zero speed from a rolling start would run away.
-      const ScanAnchor anchor{result->state, odometry.gravity(), ev.message.covariance, scan_flags & kInheritedFlags};
-      if (lockstep) propagator_.set_anchor(anchor);
-      else anchors_.publish(anchor);
-    }
-    if ((result->status & kStatusKeyframe) && !odometry.keyframes().empty()) {
-      KeyframeEvent k{std::make_shared<const Keyframe>(odometry.keyframes().back()), result->covariance, steady_ns()};
-      if (lockstep) keyframe_ring_.push_wait(k, stop_);
-      else keyframe_ring_.try_push(k);
-    }
-  };
-  auto retire_front = [&]() {
+  void retire_front() {
     spare = std::move(pending.front());
     pending.pop_front();
-  };
+  }
+};
 
-  const std::size_t max_pending = scan_ring_.capacity();
+void Pipeline::feed_imu(OdometryLoop& loop, const ImuItem& item) {
+  loop.odometry.add_imu(item.sample);
+  ++totals_.imu_fed;
+  odometry_imu_dropped_.store(loop.odometry.dropped_imu_samples(), std::memory_order_relaxed);
+  loop.last_gyro = item.sample.gyro;
+  // Live, the IMU thread makes the IMU-rate poses (publish_imu_pose).
+  if (loop.lockstep && loop.imu_poses && make_imu_pose(item, loop.imu_event)) push_pose(loop.imu_event);
+}
+
+void Pipeline::process_scan(OdometryLoop& loop, ScanItem& item) {
+  const std::int64_t start_ns = steady_ns();
+  hb_odometry_.beat(start_ns);
+  const auto result = loop.odometry.process(item.scan, item.features);
+  ++totals_.scans;
+  if (!result) return;
+  ++totals_.processed;
+  scans_processed_.fetch_add(1, std::memory_order_relaxed);
+  const double ms = result->deskew_ms + item.features_ms + result->registration_ms;
+  totals_.front_end_ms.push_back(ms);
+  last_process_ms_.store(ms + result->map_ms, std::memory_order_relaxed);
+  if (result->status & kStatusDegenerate) ++totals_.degenerate;
+  if (result->status & kStatusImuInconsistent) imu_inconsistent_scans_.fetch_add(1, std::memory_order_relaxed);
+  if (result->status & kStatusKeyframe) ++totals_.keyframes;
+  PoseEvent ev;
+  ev.message.type = pose::MessageType::ScanPose;
+  fill_state(ev.message, result->state);
+  ev.message.angular_rate = loop.last_gyro - result->state.gyro_bias;
+  ev.message.covariance = pose::pose_covariance_from_state(result->covariance);
+  const std::uint32_t scan_flags = status_flags(result->status) | gate_scan_state(*result);
+  std::uint32_t f = scan_flags | live_flags(result->state.time);
+  f &= ~static_cast<std::uint32_t>(pose::kLidarLost);  // this pose comes from a scan
+  if (item.clock_jump) f |= pose::kClockJump;
+  ev.message.flags = with_ok(f);
+  ev.diagnostics = scan_diagnostics(*result, item.features_ms);
+  ev.input_steady_ns = item.ready_steady_ns - item.queued_ns;
+  ev.queued_ns = item.queued_ns;
+  ev.process_start_ns = start_ns;
+  ev.process_end_ns = steady_ns();
+  push_pose(ev);
+  if (loop.imu_poses && !(result->status & kStatusSpeedUnknown)) {
+    // IMU-rate poses are as (un)reliable as the scan they start from: while it is initialising
+    // they are flagged so; before any speed is known (the first scan) there are none: dead
+    // reckoning at zero speed from a rolling start would run away.
+    const ScanAnchor anchor{result->state, loop.odometry.gravity(), ev.message.covariance, scan_flags & kInheritedFlags};
+    if (loop.lockstep) propagator_.set_anchor(anchor);
+    else anchors_.publish(anchor);
+  }
+  if ((result->status & kStatusKeyframe) && !loop.odometry.keyframes().empty()) {
+    KeyframeEvent k{std::make_shared<const Keyframe>(loop.odometry.keyframes().back()), result->covariance, steady_ns()};
+    if (loop.lockstep) keyframe_ring_.push_wait(k, stop_);
+    else keyframe_ring_.try_push(k);
+  }
+}
+
+// Replay as fast as possible: each scan once the IMU has reached its end, deterministically.
+// Returns whether anything moved; `done` once the scans have run out.
+bool Pipeline::lockstep_step(OdometryLoop& loop, bool& done) {
+  bool progress = false;
+  if (loop.pending.empty() && scan_ring_.try_pop(loop.spare)) {
+    loop.pending.push_back(std::move(loop.spare));
+    progress = true;
+  }
+  if (loop.pending.empty()) {
+    done = scan_ring_.drained();  // like the single-threaded replay, IMU samples after the last scan are not used
+    return progress;
+  }
+  const double end = loop.odometry.scan_end_time(loop.pending.front().scan);
+  for (;;) {
+    if (!loop.have_held) loop.have_held = imu_ring_.try_pop(loop.held);
+    if (!loop.have_held || loop.held.sample.time > end + 0.02) break;
+    feed_imu(loop, loop.held);
+    loop.have_held = false;
+    progress = true;
+  }
+  const bool imu_ended = !loop.have_held && imu_ring_.drained();
+  // A held sample is past the scan's end: an IMU gap left nothing up to the end, and waiting for
+  // it would block both sources for good. Process now (flagged IMU gap).
+  const bool imu_passed = loop.have_held && loop.held.sample.time > end;
+  if (loop.odometry.latest_imu_time() >= end || imu_passed || imu_ended) {
+    process_scan(loop, loop.pending.front());
+    loop.retire_front();
+    progress = true;
+  }
+  return progress;
+}
+
+// Live (and paced replay): scans as they arrive, each once the IMU has reached its end or it has
+// waited time.imu_wait_s for it.
+bool Pipeline::arrival_step(OdometryLoop& loop, bool& done) {
+  bool progress = false;
+  while (loop.pending.size() < scan_ring_.capacity() && scan_ring_.try_pop(loop.spare)) {
+    loop.pending.push_back(std::move(loop.spare));
+    progress = true;
+  }
+  auto process_ready = [&]() {
+    while (!loop.pending.empty()) {
+      const double end = loop.odometry.scan_end_time(loop.pending.front().scan);
+      const bool imu_there = loop.odometry.latest_imu_time() >= end;
+      const bool waited = steady_ns() - loop.pending.front().ready_steady_ns > loop.imu_wait_ns;
+      if (!imu_there && !waited && !imu_ring_.drained()) break;
+      process_scan(loop, loop.pending.front());
+      loop.retire_front();
+      progress = true;
+    }
+  };
+  process_ready();
+  while (imu_ring_.try_pop(loop.held)) {
+    feed_imu(loop, loop.held);
+    progress = true;
+    process_ready();
+  }
+  done = loop.pending.empty() && scan_ring_.drained() && imu_ring_.drained();
+  return progress;
+}
+
+void Pipeline::odometry_thread() {
+  apply_thread_config(config_.threads.odometry, "liod-odometry");
+  OdometryLoop loop(config_);
+  loop.lockstep = options_.ordering == Ordering::Lockstep;
+  loop.imu_poses = options_.imu_rate_poses;
+  loop.imu_wait_ns = static_cast<std::int64_t>(config_.time.imu_wait_s * 1e9);
   while (!stop_.load(std::memory_order_relaxed)) {
     hb_odometry_.beat(steady_ns());
-    bool progress = false;
-    if (lockstep) {
-      if (pending.empty() && scan_ring_.try_pop(spare)) {
-        pending.push_back(std::move(spare));
-        progress = true;
-      }
-      if (!pending.empty()) {
-        const double end = odometry.scan_end_time(pending.front().scan);
-        for (;;) {
-          if (!have_held) have_held = imu_ring_.try_pop(held);
-          if (!have_held || held.sample.time > end + 0.02) break;
-          feed(held);
-          have_held = false;
-          progress = true;
-        }
-        const bool imu_ended = !have_held && imu_ring_.drained();
-        // A held sample is past the scan's end: an IMU gap left nothing up to the end, and
-        // waiting for it would block both sources for good. Process now (flagged IMU gap).
-        const bool imu_passed = have_held && held.sample.time > end;
-        if (odometry.latest_imu_time() >= end || imu_passed || imu_ended) {
-          process(pending.front());
-          retire_front();
-          progress = true;
-        }
-      } else if (scan_ring_.drained()) {
-        break;  // like the single-threaded replay, IMU samples after the last scan are not used
-      }
-    } else {
-      while (pending.size() < max_pending && scan_ring_.try_pop(spare)) {
-        pending.push_back(std::move(spare));
-        progress = true;
-      }
-      auto process_ready = [&]() {
-        while (!pending.empty()) {
-          const double end = odometry.scan_end_time(pending.front().scan);
-          const bool imu_there = odometry.latest_imu_time() >= end;
-          const bool waited = steady_ns() - pending.front().ready_steady_ns > imu_wait_ns;
-          if (!imu_there && !waited && !imu_ring_.drained()) break;
-          process(pending.front());
-          retire_front();
-          progress = true;
-        }
-      };
-      process_ready();
-      while (imu_ring_.try_pop(held)) {
-        feed(held);
-        progress = true;
-        process_ready();
-      }
-      if (pending.empty() && scan_ring_.drained() && imu_ring_.drained()) break;
-    }
-    if (!progress) odometry_wakeup_.wait(std::chrono::milliseconds(lockstep ? 1 : 5));
+    bool done = false;
+    const bool progress = loop.lockstep ? lockstep_step(loop, done) : arrival_step(loop, done);
+    if (done) break;
+    if (!progress) odometry_wakeup_.wait(std::chrono::milliseconds(loop.lockstep ? 1 : 5));
   }
-  totals_.imu_dropped = odometry.dropped_imu_samples();
+  totals_.imu_dropped = loop.odometry.dropped_imu_samples();
   pose_ring_.close();
   keyframe_ring_.close();
 }

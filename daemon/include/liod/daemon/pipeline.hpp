@@ -195,6 +195,11 @@ class Pipeline {
   void lidar_thread(LidarSource& source);
   void imu_thread(ImuSource* source);
   void odometry_thread();
+  struct OdometryLoop;  // the odometry thread's state (pipeline.cpp)
+  void feed_imu(OdometryLoop& loop, const ImuItem& item);
+  void process_scan(OdometryLoop& loop, ScanItem& item);
+  bool lockstep_step(OdometryLoop& loop, bool& done);
+  bool arrival_step(OdometryLoop& loop, bool& done);
   void publisher_thread(PoseServer* server);
   void backend_thread();
   /// One keyframe on the backend thread: its loop search, solve and state files, or shed.
