@@ -1,5 +1,6 @@
 #include "liod/drivers/rs_helios.hpp"
 
+#include <algorithm>
 #include <span>
 #include <utility>
 
@@ -24,6 +25,12 @@ constexpr std::uint32_t kMaxPlausibleLoss = 100000;
 
 }  // namespace
 
+bool is_helios_packet(std::span<const std::uint8_t> payload) noexcept {
+  if (payload.size() != helios::kPacketBytes) return false;
+  return has_difop_magic(payload) ||
+         std::equal(helios::kMsopMagic.begin(), helios::kMsopMagic.end(), payload.begin());
+}
+
 RsHeliosDecoder::RsHeliosDecoder(HeliosOptions options, SweepCallback on_sweep)
     : options_(std::move(options)),
       msop_(options_.model, options_.msop),
@@ -44,6 +51,8 @@ HeliosStats RsHeliosDecoder::stats() const noexcept {
   s.sweeps = sweeps_.sweeps_emitted();
   s.partial_sweeps_dropped = sweeps_.partial_sweeps_dropped();
   s.time_gaps = sweeps_.time_gaps();
+  s.truncated_sweeps = sweeps_.truncated_sweeps();
+  s.largest_sweep_points = sweeps_.largest_sweep_points();
   s.duplicate_packets = sweeps_.duplicate_packets();
   s.late_packets = sweeps_.late_packets();
   s.late_packets_dropped = sweeps_.late_packets_dropped();

@@ -171,7 +171,7 @@ struct LidarDriverConfig {
   std::string bind_address = "0.0.0.0";   // local IPv4 address the MSOP/DIFOP sockets bind to
   std::string multicast_group;             // "" = unicast; else an IPv4 group to join
   std::string multicast_interface = "0.0.0.0";  // local address of the interface that joins the group
-  std::string source_address;              // "" = any sender; else only datagrams from this IPv4 address
+  std::string source_address;              // "" = the first RS-Helios sender; else only datagrams from this IPv4 address
   int receive_buffer_bytes = 16 * 1024 * 1024;  // SO_RCVBUF(FORCE): 1 s of MSOP is ~1.9 MB
   int batch = 64;                          // datagrams per recvmmsg call
   double lost_after_s = 0.5;               // no sweep for this long flags "LiDAR lost"

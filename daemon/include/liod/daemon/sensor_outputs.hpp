@@ -30,6 +30,7 @@ struct ScanItem {
   std::int64_t ready_steady_ns = 0;  ///< when the driver thread took the packet completing the sweep
   std::int64_t queued_ns = 0;        ///< how long that packet had waited in the socket (live)
   bool clock_jump = false;           ///< the LiDAR clock jumped during the sweep, or is off (pose::kClockJump)
+  bool sweep_truncated = false;      ///< sweeps before it were cut at the size cap and not passed on (pose::kSweepTruncated)
 };
 
 /// What a live transport counts below the decoding (socket, serial line, CAN), for health.
@@ -80,7 +81,7 @@ class LidarOutput {
   TransportCounters transport;
 
  private:
-  void on_sweep(Scan& scan);
+  void on_sweep(Scan& scan, const drivers::SweepInfo& info);
   /// The host - LiDAR offset the configuration's lidar_clock calls for now.
   std::int64_t clock_offset() const;
   /// The LiDAR's header time is within time.jump_threshold_s of the host's.
@@ -104,6 +105,7 @@ class LidarOutput {
   std::atomic<std::int64_t> heartbeat_{0};
   std::atomic<std::uint64_t> packets_{0}, lost_{0}, sweeps_{0}, jumps_{0}, steps_{0};
   std::uint64_t jumps_at_last_sweep_ = 0;
+  bool truncated_since_last_ = false;  // sweeps cut at the size cap since the last one passed on
   std::atomic<std::int64_t> last_sweep_{0}, step_correction_{0};
   std::atomic<double> last_step_time_{std::numeric_limits<double>::infinity()};
   std::atomic<std::int64_t> offset_used_{0};

@@ -72,6 +72,8 @@ struct HeliosStats {
   std::uint64_t counter_resets = 0;   ///< counter went backwards or jumped implausibly far
   std::uint64_t azimuth_jumps = 0;    ///< packet-to-packet azimuth step > 1° (loss or blind zone)
   std::uint64_t time_gaps = 0;        ///< sweeps cut short by a time gap or a clock step
+  std::uint64_t truncated_sweeps = 0; ///< sweeps cut at the block cap: the azimuth never crossed the split
+  std::uint64_t largest_sweep_points = 0;  ///< the most points one sweep handed out held
   std::uint64_t duplicate_packets = 0;  ///< repeats of a recent packet (same header time), ignored
   std::uint64_t late_packets = 0;       ///< arrived after later ones: added to their sweep in time order
   std::uint64_t late_packets_dropped = 0;  ///< arrived after their sweep was out
@@ -84,6 +86,9 @@ struct HeliosStats {
 };
 
 enum class PacketKind : std::uint8_t { Msop, Difop, Rejected };
+
+/// A 1248-byte payload with the MSOP or the DIFOP magic (spec §1): what an RS-Helios sends.
+[[nodiscard]] bool is_helios_packet(std::span<const std::uint8_t> payload) noexcept;
 
 class RsHeliosDecoder {
  public:
