@@ -213,6 +213,8 @@ Schema declare_schema(Config& c) {
   s.real("lidar.max_range_m", &c.lidar.max_range_m, 1.0, 500.0);
   s.real("lidar.split_azimuth_deg", &c.lidar.split_azimuth_deg, 0.0, 359.99);
   s.integer("lidar.packets_before_difop", &c.lidar.packets_before_difop, 0, 65536);
+  s.choice("lidar.calibration_updates", &c.lidar.calibration_updates,
+           {{"pin", CalibrationUpdates::kPin}, {"follow", CalibrationUpdates::kFollow}});
 
   s.real("imu.rate_hz", &c.imu.rate_hz, 10.0, 10000.0);
   s.real("imu.gyro_noise_density", &c.imu.gyro_noise_density, 1e-7, 1.0);

@@ -30,7 +30,7 @@ std::uint32_t status_flags(std::uint32_t odometry_status) {
 
 std::uint32_t with_ok(std::uint32_t f) {
   constexpr std::uint32_t kBad = pose::kInitializing | pose::kDegenerate | pose::kImuLost | pose::kLidarLost |
-                                 pose::kImuInconsistent | pose::kSweepTruncated;
+                                 pose::kImuInconsistent | pose::kSweepTruncated | pose::kCalibrationChanged;
   return (f & kBad) == 0 ? f | pose::kOk : f;
 }
 
@@ -308,6 +308,7 @@ void Pipeline::odometry_thread() {
     f &= ~static_cast<std::uint32_t>(pose::kLidarLost);  // this pose comes from a scan
     if (item.clock_jump) f |= pose::kClockJump;
     if (item.sweep_truncated) f |= pose::kSweepTruncated;
+    if (item.calibration_changed) f |= pose::kCalibrationChanged;
     ev.message.flags = with_ok(f);
     auto& d = ev.diagnostics;
     d.status = result->status;
@@ -341,7 +342,7 @@ void Pipeline::odometry_thread() {
       // reckoning at zero speed from a rolling start would run away.
       const ScanAnchor anchor{result->state, odometry.gravity(), ev.message.covariance,
                               (scan_flags & (pose::kInitializing | pose::kDegenerate | pose::kFewFeatures)) |
-                                  (f & pose::kSweepTruncated)};
+                                  (f & (pose::kSweepTruncated | pose::kCalibrationChanged))};
       if (lockstep) propagator_.set_anchor(anchor);
       else anchors_.publish(anchor);
     }
@@ -528,7 +529,8 @@ std::string Pipeline::health_json(HealthRates& rates) const {
     << hs.rejected() << ",\"transport_lost\":" << lidar_out_->transport.lost.load() << ",\"transport_refused\":"
     << lidar_out_->transport.refused.load() << ",\"held_before_difop\":" << hs.held_for_calibration << ",\"clock_offset_s\":" << static_cast<double>(lidar_out_->clock_offset_ns()) * 1e-9
     << ",\"sensor_synced\":" << (lidar_out_->sensor_synced() ? "true" : "false") << ",\"clock_jumps\":"
-    << lidar_out_->clock_jumps() << ",\"truncated_sweeps\":" << hs.truncated_sweeps << "},\"time\":{\"host_clock_jumps\":" << host_jumps_.load()
+    << lidar_out_->clock_jumps() << ",\"truncated_sweeps\":" << hs.truncated_sweeps << ",\"calibration_changes\":"
+    << hs.calibration_changes << "},\"time\":{\"host_clock_jumps\":" << host_jumps_.load()
     << ",\"lidar_steps\":" << lidar_out_->clock_steps()
     << ",\"lidar_step_correction_s\":" << static_cast<double>(lidar_out_->step_correction_ns()) * 1e-9
     << ",\"imu_steps\":" << imu_out_->clock_steps()

@@ -19,6 +19,9 @@ drivers::HeliosOptions helios_options(const Config& config) {
   o.msop.max_range_m = static_cast<float>(config.lidar.max_range_m);
   o.split_azimuth_deg = config.lidar.split_azimuth_deg;
   o.max_held_packets = static_cast<std::size_t>(config.lidar.packets_before_difop);
+  o.calibration_updates = config.lidar.calibration_updates == CalibrationUpdates::kFollow
+                              ? drivers::CalibrationUpdates::Follow
+                              : drivers::CalibrationUpdates::Pin;
   return o;
 }
 
@@ -128,6 +131,7 @@ void LidarOutput::on_sweep(Scan& scan, const drivers::SweepInfo& info) {
   jumps_at_last_sweep_ = jumps;
   item_.sweep_truncated = truncated_since_last_;
   truncated_since_last_ = false;
+  item_.calibration_changed = info.calibration_changed;
   if (shift_ns_ != 0) {
     const double o = static_cast<double>(shift_ns_) * 1e-9;
     scan.start_time += o;

@@ -90,18 +90,41 @@ bool SweepAssembler::is_late(const PacketPoints& packet) const noexcept {
   return open_ && late_s > 0.0 && late_s <= options_.max_block_gap_s;
 }
 
-void SweepAssembler::add(const PacketPoints& packet) {
-  if (packet.block_count == 0) return;
-  if (repeats_recent(packet)) {
-    ++duplicates_;
-    return;
+std::size_t SweepAssembler::next_sweep_block(const PacketPoints& packet) const noexcept {
+  if (!open_) return 0;
+  const PacketKey key{packet.time_ns, packet.blocks[0].azimuth};
+  if (packet.block_count == 0 || is_late(packet) ||
+      std::find(recent_packets_.begin(), recent_packets_.end(), key) != recent_packets_.end())
+    return packet.block_count;
+  std::int64_t last_ns = last_block_ns_;
+  std::uint16_t last_az = last_azimuth_;
+  std::uint32_t blocks = info_.blocks;
+  for (std::size_t b = 0; b < packet.block_count; ++b, ++blocks) {
+    const std::int64_t block_ns = block_time_ns(packet, b);
+    if (boundary(last_ns, last_az, blocks, block_ns, packet.blocks[b].azimuth) != Boundary::None) return b;
+    last_ns = block_ns;
+    last_az = packet.blocks[b].azimuth;
   }
-  if (is_late(packet)) {
-    add_late(packet);
-    return;
+  return packet.block_count;
+}
+
+void SweepAssembler::add(const PacketPoints& packet) { add_blocks(packet, 0, packet.block_count); }
+
+void SweepAssembler::add_blocks(const PacketPoints& packet, std::size_t first, std::size_t end) {
+  end = std::min(end, packet.block_count);
+  if (first >= end) return;
+  if (first == 0) {
+    if (repeats_recent(packet)) {
+      ++duplicates_;
+      return;
+    }
+    if (is_late(packet)) {
+      add_late(packet);
+      return;
+    }
   }
   bool counted_packet = false;
-  for (std::size_t b = 0; b < packet.block_count; ++b) {
+  for (std::size_t b = first; b < end; ++b) {
     const FiringBlock& block = packet.blocks[b];
     const std::int64_t block_ns = block_time_ns(packet, b);
     if (!open_) {

@@ -36,6 +36,7 @@ TEST(ConfigLoader, ShippedConfigLoadsAndMatchesDefaults) {
   EXPECT_DOUBLE_EQ(config.odometry.standstill_gyro_bias_std, defaults.odometry.standstill_gyro_bias_std);
   EXPECT_DOUBLE_EQ(config.odometry.post_max_width_m, defaults.odometry.post_max_width_m);
   EXPECT_DOUBLE_EQ(config.odometry.crossing_edge_tolerance_m, defaults.odometry.crossing_edge_tolerance_m);
+  EXPECT_EQ(config.lidar.calibration_updates, defaults.lidar.calibration_updates);
 }
 
 TEST(ConfigLoader, UnknownKeyNamesFileKeyAndValue) {

@@ -23,6 +23,8 @@ struct LogConfig {
   std::string level = "info";  // trace, debug, info, warn, error, off
 };
 
+enum class CalibrationUpdates { kPin, kFollow };
+
 struct LidarConfig {
   LidarModel model = LidarModel::kHelios5515;
   int msop_port = 6699;
@@ -32,6 +34,7 @@ struct LidarConfig {
   double max_range_m = 180.0;
   double split_azimuth_deg = 0.0;
   int packets_before_difop = 4096;  // without angles_csv: MSOP held until the first DIFOP (1 s is ~1500)
+  CalibrationUpdates calibration_updates = CalibrationUpdates::kPin;  // a later DIFOP's differing calibration: pin (flagged) | follow (at a sweep boundary)
 };
 
 struct ImuConfig {

@@ -31,6 +31,7 @@ struct ScanItem {
   std::int64_t queued_ns = 0;        ///< how long that packet had waited in the socket (live)
   bool clock_jump = false;           ///< the LiDAR clock jumped during the sweep, or is off (pose::kClockJump)
   bool sweep_truncated = false;      ///< sweeps before it were cut at the size cap and not passed on (pose::kSweepTruncated)
+  bool calibration_changed = false;  ///< the DIFOP disagreed with its calibration, or it is a new one's first (pose::kCalibrationChanged)
 };
 
 /// What a live transport counts below the decoding (socket, serial line, CAN), for health.

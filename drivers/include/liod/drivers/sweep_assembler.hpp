@@ -52,6 +52,9 @@ struct SweepInfo {
   /// Cut at SweepOptions::max_blocks at its end or its start: the azimuth had not crossed the
   /// split for that many blocks (begun at such a cut, it holds the rest of that run).
   bool truncated = false;
+  /// Set by RsHeliosDecoder: the sensor's DIFOP disagreed with the calibration this sweep was
+  /// decoded with (CalibrationUpdates::Pin), or this is the first sweep of a new one (Follow).
+  bool calibration_changed = false;
   bool flushed = false;       ///< emitted by flush() (incomplete)
 };
 
@@ -68,6 +71,15 @@ class SweepAssembler {
   /// dropped when it is older than the open sweep (its sweep is already out) or would take the
   /// sweep past max_blocks.
   void add(const PacketPoints& packet);
+  /// Blocks [first, end) of `packet` only, for a packet fed in two parts at a sweep boundary (see
+  /// next_sweep_block): its head with first = 0 goes through add()'s checks; a tail (first > 0)
+  /// is taken as the rest of a packet already checked, and may be a new decoding of it.
+  void add_blocks(const PacketPoints& packet, std::size_t first, std::size_t end);
+  /// The block of `packet` with which add() would begin a new sweep (the split crossed, a time
+  /// gap, max_blocks reached; 0 when no sweep is open), or packet.block_count when all of it would
+  /// join the open sweep (or be ignored as a repeat, or merged as late).
+  [[nodiscard]] std::size_t next_sweep_block(const PacketPoints& packet) const noexcept;
+  [[nodiscard]] bool sweep_open() const noexcept { return open_; }
   /// End of stream: emits the open sweep if it has blocks and options.emit_partial_on_flush is
   /// set, otherwise drops it (counted). Then starts afresh.
   void flush();
