@@ -223,6 +223,8 @@ Schema declare_schema(Config& c) {
   s.real("imu.accel_bias_random_walk", &c.imu.accel_bias_random_walk, 1e-9, 10.0);
   s.real("imu.gravity_m_s2", &c.imu.gravity_m_s2, 9.7, 9.9);
   s.real("imu.max_gap_s", &c.imu.max_gap_s, 0.001, 10.0);
+  s.real("imu.gyro_range_rad_s", &c.imu.gyro_range_rad_s, 1.0, 1000.0);
+  s.real("imu.accel_range_m_s2", &c.imu.accel_range_m_s2, 10.0, 10000.0);
 
   s.vector3("extrinsics.lidar_to_imu.translation_m", &c.extrinsics.lidar_to_imu_translation, 10.0);
   s.quaternion("extrinsics.lidar_to_imu.rotation_xyzw", &c.extrinsics.lidar_to_imu_rotation);
@@ -438,9 +440,16 @@ void validate_relations(const Config& c, const std::string& origin) {
       throw ConfigError(origin + ": key 'pose_socket.mode' = '" + m + "': must be octal permission bits, e.g. 0660");
     }
   }
-  if (c.drivers.imu.transport == ImuTransport::kCan && c.drivers.imu.can_profile == CanProfile::kTable &&
-      c.drivers.imu.can_signals.empty()) {
-    throw ConfigError(origin + ": key 'drivers.imu.can_signals' = '[]': the table profile needs at least one signal");
+  if (c.drivers.imu.transport == ImuTransport::kCan && c.drivers.imu.can_profile == CanProfile::kTable) {
+    // An axis the table never receives would read 0 as if measured; the decoder emits no sample without it.
+    for (const char* q : {"gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"}) {
+      bool mapped = false;
+      for (const auto& sig : c.drivers.imu.can_signals) mapped = mapped || sig.quantity == q;
+      if (!mapped) {
+        throw ConfigError(origin + ": key 'drivers.imu.can_signals': the table profile needs a signal for each of "
+                          "gyro_x, gyro_y, gyro_z, accel_x, accel_y, accel_z (" + q + " has none)");
+      }
+    }
   }
   static const char* kLevels[] = {"trace", "debug", "info", "warn", "error", "critical", "off"};
   bool level_ok = false;

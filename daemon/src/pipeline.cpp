@@ -30,7 +30,8 @@ std::uint32_t status_flags(std::uint32_t odometry_status) {
 
 std::uint32_t with_ok(std::uint32_t f) {
   constexpr std::uint32_t kBad = pose::kInitializing | pose::kDegenerate | pose::kImuLost | pose::kLidarLost |
-                                 pose::kImuInconsistent | pose::kSweepTruncated | pose::kCalibrationChanged;
+                                 pose::kImuInconsistent | pose::kSweepTruncated | pose::kCalibrationChanged |
+                                 pose::kImuSaturated;
   return (f & kBad) == 0 ? f | pose::kOk : f;
 }
 
@@ -85,6 +86,7 @@ Pipeline::Pipeline(const Config& config, PipelineOptions options)
   lidar_out_ = std::make_unique<LidarOutput>(config_, scan_ring_, lossless, bridge, source_stop_);
   imu_out_ = std::make_unique<ImuOutput>(imu_ring_, lossless, source_stop_,
                                          bridge ? static_cast<std::int64_t>(config_.time.jump_threshold_s * 1e9) : 0);
+  imu_out_->range = {config_.imu.gyro_range_rad_s, config_.imu.accel_range_m_s2};
   if (!lossless && options_.imu_rate_poses) imu_out_->on_sample = [this](const ImuItem& item) { publish_imu_pose(item); };
   if (config_.backend.enabled) backend_ = std::make_unique<BackendWorker>(config_);
 }
@@ -229,6 +231,7 @@ void Pipeline::note_host_clock_jump() noexcept {
 }
 
 bool Pipeline::make_imu_pose(const ImuItem& item, PoseEvent& ev) {
+  if ((item.sample.flags & ImuSample::kSaturated) != 0) imu_saturated_time_ = item.sample.time;
   const auto state = propagator_.add(item.sample);
   if (!state) return false;
   const ScanAnchor& anchor = *propagator_.anchor();
@@ -246,6 +249,7 @@ bool Pipeline::make_imu_pose(const ImuItem& item, PoseEvent& ev) {
   ev.message.covariance = anchor.pose_covariance;  // of the last scan update (not propagated)
   std::uint32_t f = anchor.flags;
   if (dead_reckoned_s > config_.drivers.lidar.lost_after_s) f |= pose::kLidarLost;
+  if (imu_saturated_time_ > anchor.state.time) f |= pose::kImuSaturated;  // integrated a clipped sample
   ev.message.flags = with_ok(f | live_flags(state->time));
   ev.input_steady_ns = item.arrival_steady_ns;
   return true;
@@ -274,12 +278,17 @@ void Pipeline::odometry_thread() {
   bool have_held = false;
   Eigen::Vector3d last_gyro = Eigen::Vector3d::Zero();
   PoseEvent imu_event;
+  // Data times of the last clipped IMU sample fed and of the last scan pose: a scan whose interval
+  // held a clipped sample was predicted and deskewed with it.
+  double last_saturated = -std::numeric_limits<double>::infinity();
+  double previous_scan_time = -std::numeric_limits<double>::infinity();
 
   auto feed = [&](const ImuItem& item) {
     odometry.add_imu(item.sample);
     ++totals_.imu_fed;
     odometry_imu_dropped_.store(odometry.dropped_imu_samples(), std::memory_order_relaxed);
     last_gyro = item.sample.gyro;
+    if ((item.sample.flags & ImuSample::kSaturated) != 0) last_saturated = item.sample.time;
     // Live, the IMU thread makes the IMU-rate poses (publish_imu_pose).
     if (lockstep && imu_poses && make_imu_pose(item, imu_event)) push_pose(imu_event);
   };
@@ -309,6 +318,8 @@ void Pipeline::odometry_thread() {
     if (item.clock_jump) f |= pose::kClockJump;
     if (item.sweep_truncated) f |= pose::kSweepTruncated;
     if (item.calibration_changed) f |= pose::kCalibrationChanged;
+    if (last_saturated > previous_scan_time) f |= pose::kImuSaturated;
+    previous_scan_time = result->state.time;
     ev.message.flags = with_ok(f);
     auto& d = ev.diagnostics;
     d.status = result->status;
@@ -538,6 +549,7 @@ std::string Pipeline::health_json(HealthRates& rates) const {
     << "},\"imu\":{\"samples\":" << imu << ",\"rate_hz\":" << rate(imu, rates.imu)
     << ",\"transport_lost\":" << imu_out_->transport.lost.load() << ",\"transport_refused\":"
     << imu_out_->transport.refused.load() << ",\"out_of_order\":" << imu_out_->out_of_order()
+    << ",\"saturated\":" << imu_out_->saturated() << ",\"out_of_range\":" << imu_out_->out_of_range()
     << ",\"odometry_dropped\":" << odometry_imu_dropped_.load() << ",\"pps_correction_s\":" << static_cast<double>(imu_out_->pps_correction_ns.load()) * 1e-9
     << "},\"odometry\":{\"scans\":" << scans << ",\"scan_rate_hz\":" << rate(scans, rates.scans)
     << ",\"last_process_ms\":" << last_process_ms_.load() << ",\"imu_poses_withheld\":" << imu_poses_withheld_.load()

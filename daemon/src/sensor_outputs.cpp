@@ -180,6 +180,17 @@ void ImuOutput::sample(const ImuSample& delivered) {
   heartbeat_.store(now, std::memory_order_relaxed);
   if (tap) tap(delivered);
   ImuSample s = delivered;
+  switch (drivers::classify(s, range)) {
+    case drivers::ImuReading::OutOfRange:
+      out_of_range_.fetch_add(1, std::memory_order_relaxed);
+      return;
+    case drivers::ImuReading::Saturated:
+      s.flags |= ImuSample::kSaturated;
+      saturated_.fetch_add(1, std::memory_order_relaxed);
+      break;
+    case drivers::ImuReading::Valid:
+      break;
+  }
   if (bridge_) {
     // Bridged without the PPS correction the transport added: that one is meant to move the time.
     const std::int64_t pps = pps_correction_ns.load(std::memory_order_relaxed);

@@ -206,6 +206,7 @@ void SerialImuSource::run(ImuOutput& out, const std::atomic<bool>& stop) {
     s.time = static_cast<double>(t + out.pps_correction_ns.load(std::memory_order_relaxed)) * 1e-9;
     s.gyro = *m.rate_of_turn;
     s.accel = *m.acceleration;
+    if (m.status_word && drivers::xsens::inertial_clipped(*m.status_word)) s.flags |= ImuSample::kSaturated;
     out.sample(s);
   });
   std::vector<std::uint8_t> buffer(4096);
@@ -257,7 +258,7 @@ void CanImuSource::run(ImuOutput& out, const std::atomic<bool>& stop) {
         out.heartbeat();
         if (!can.read(frame, 50)) continue;
         auto s = decoder.feed(frame);
-        out.transport.lost.store(decoder.stats().unpaired, std::memory_order_relaxed);
+        out.transport.lost.store(decoder.stats().unpaired + decoder.stats().stale_axes, std::memory_order_relaxed);
         out.transport.refused.store(decoder.stats().not_available, std::memory_order_relaxed);
         if (s) {
           s->time += static_cast<double>(out.pps_correction_ns.load(std::memory_order_relaxed)) * 1e-9;

@@ -45,6 +45,8 @@ struct ImuConfig {
   double accel_bias_random_walk = 1.0e-2;  // m/s^3/sqrt(Hz), inflated on purpose (config/liod.yaml)
   double gravity_m_s2 = 9.80665;
   double max_gap_s = 0.05;              // a longer gap marks the IMU as lost
+  double gyro_range_rad_s = 34.91;      // measurement range (Xsens MTi-630: 2000 deg/s): beyond = dropped, at = saturated
+  double accel_range_m_s2 = 98.07;      // measurement range (Xsens MTi-630: 10 g): beyond = dropped, at = saturated
 };
 
 struct ExtrinsicsConfig {

@@ -57,6 +57,7 @@ enum Flag : std::uint32_t {
   kImuInconsistent = 1U << 8,  ///< the scan's registration contradicted the IMU prediction far beyond its covariance
   kSweepTruncated = 1U << 9,   ///< sweeps before this scan were cut at the size cap and dropped (a stuck azimuth)
   kCalibrationChanged = 1U << 10,  ///< the LiDAR's DIFOP disagreed with the calibration in use, or a new one began
+  kImuSaturated = 1U << 11,    ///< an IMU sample since the previous pose clipped at the sensor's range
 };
 
 struct PoseMessage {

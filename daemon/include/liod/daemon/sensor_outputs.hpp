@@ -14,6 +14,7 @@
 
 #include "liod/config.hpp"
 #include "liod/curvature_features.hpp"
+#include "liod/drivers/imu_range.hpp"
 #include "liod/drivers/rs_helios.hpp"
 #include "liod/drivers/spsc_ring.hpp"
 #include "liod/drivers/time_sync.hpp"
@@ -130,6 +131,12 @@ class ImuOutput {
   std::uint64_t clock_steps() const noexcept { return steps_.load(std::memory_order_relaxed); }
   std::int64_t step_correction_ns() const noexcept { return step_correction_.load(std::memory_order_relaxed); }
   double last_step_time() const noexcept { return last_step_time_.load(std::memory_order_relaxed); }
+  /// Samples with an axis at the IMU's measurement range (flagged ImuSample::kSaturated, passed on)
+  /// and beyond it or not finite (dropped).
+  std::uint64_t saturated() const noexcept { return saturated_.load(std::memory_order_relaxed); }
+  std::uint64_t out_of_range() const noexcept { return out_of_range_.load(std::memory_order_relaxed); }
+  /// The IMU's measurement range (imu.gyro_range_rad_s, imu.accel_range_m_s2); set before the thread starts.
+  drivers::ImuRange range;
   /// Host-clock correction from PPS (added to host-stamped samples by the transports).
   std::atomic<std::int64_t> pps_correction_ns{0};
   /// Called with every sample as the transport delivered it (liod record).
@@ -147,7 +154,7 @@ class ImuOutput {
   double last_time_ = -std::numeric_limits<double>::infinity();  // of the last sample passed on
   ImuItem item_;
   std::atomic<std::int64_t> heartbeat_{0};
-  std::atomic<std::uint64_t> samples_{0}, steps_{0}, out_of_order_{0};
+  std::atomic<std::uint64_t> samples_{0}, steps_{0}, out_of_order_{0}, saturated_{0}, out_of_range_{0};
   std::atomic<std::int64_t> last_{0}, step_correction_{0};
   std::atomic<double> last_step_time_{std::numeric_limits<double>::infinity()};
 };
