@@ -74,7 +74,7 @@ std::vector<test::Record> records(const std::vector<Packet>& packets) {
 }
 
 // ---- fuzz_rs_helios: prologue (see fuzz_rs_helios.cpp) + payloads --------------------------------
-enum Flags : std::uint8_t { k16P = 1, kForceDual = 4, kDifopAngles = 8, kTableAngles = 16, kArrivalTime = 32 };
+enum Flags : std::uint8_t { k16P = 1, kForceDual = 4, kFollow = 6, kDifopAngles = 8, kTableAngles = 16, kArrivalTime = 32 };
 
 /// The split-azimuth byte that puts the sweep split inside `payload`'s block azimuths.
 std::uint8_t split_inside(const Bytes& msop) {
@@ -103,6 +103,17 @@ void capture_seeds(SeedWriter& out, const std::string& name, const std::vector<P
   const std::uint8_t split = split_inside(msop_only.at(msop_only.size() / 2).payload);
   const std::int64_t arrival = msop_only.front().time_ns;
   out.write("fuzz_rs_helios", name + "-difop-first", helios_stream(model | kDifopAngles, split, arrival, difop_first));
+  if (has_difop_magic(difop_first.front().payload)) {
+    // The CSV's table, the DIFOP's from the next sweep boundary, then another DIFOP whose first
+    // elevation differs, followed at the boundary after (calibration_updates: follow).
+    std::vector<Packet> difop_mid = msop_only;
+    Packet changed = difop_first.front();
+    changed.payload[468 + 2] ^= 0x10;
+    difop_mid.insert(difop_mid.begin() + 4, changed);
+    difop_mid.insert(difop_mid.begin() + 2, difop_first.front());
+    out.write("fuzz_rs_helios", name + "-difops-mid-sweep-follow",
+              helios_stream(model | kFollow | kDifopAngles | kTableAngles, split, arrival, difop_mid));
+  }
   out.write("fuzz_rs_helios", name + "-table-arrival-time",
             helios_stream(model | kTableAngles | kArrivalTime, split | 0x80, arrival, msop_only));
   // Arrival times that leave the decoder's time range in mid-stream.
