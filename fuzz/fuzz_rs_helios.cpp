@@ -3,7 +3,8 @@
 //
 // Input: a 10-byte prologue, then the payloads back to back, 1248 bytes each (the size of every
 // MSOP and DIFOP packet); a shorter tail is fed as well, as the wrong-sized packet it is.
-//   byte 0   bit 0: 16P (else 5515); bits 1-2: return-mode policy; bit 3: take DIFOP's angles;
+//   byte 0   bit 0: 16P (else 5515); bits 1-2: return-mode policy (3: auto, and a later DIFOP's
+//            calibration followed at the next sweep boundary); bit 3: take DIFOP's angles;
 //            bit 4: start with an angle table; bit 5: arrival-time clock; bits 6-7: range resolution
 //   byte 1   bits 0-6: split azimuth in 360/128° steps; bit 7: emit the partial sweep on flush
 //   2..9     arrival time of the first packet, ns, little-endian; then one packet per 2/3 ms
@@ -38,6 +39,7 @@ HeliosOptions options_from(const std::uint8_t* p) {
   constexpr ReturnModePolicy kPolicies[] = {ReturnModePolicy::Auto, ReturnModePolicy::ForceSingle,
                                             ReturnModePolicy::ForceDual, ReturnModePolicy::Auto};
   o.return_mode = kPolicies[(p[0] >> 1) & 3U];
+  o.calibration_updates = ((p[0] >> 1) & 3U) == 3 ? CalibrationUpdates::Follow : CalibrationUpdates::Pin;
   o.use_difop_angles = (p[0] & 8U) != 0;
   if ((p[0] & 16U) != 0) o.angles = spread_angles(o.model);
   o.msop.time_source = (p[0] & 32U) != 0 ? TimeSource::ArrivalTime : TimeSource::SensorClock;

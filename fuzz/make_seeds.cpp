@@ -1,7 +1,8 @@
 // liod-fuzz-seeds OUT_DIR: writes the seed corpus of every fuzz target to OUT_DIR/<target>/.
 // Sources: the liod-sim captures and IMU log cut into fuzz/corpus/, the project's configuration
 // files, messages built with the project's own encoders, and, when ../shared is there, the real
-// RS-Helios-16P recording (read in place, never copied into the project).
+// RS-Helios-16P recording and the two real angle tables (read in place, never copied into the
+// project).
 //
 // fuzz/corpus/ holds, from `liod-sim --route urban --seed 7 --duration 1.2 [--dual-return]`: the
 // DIFOP and the 4 MSOP packets around the first azimuth wrap after it (sim-5515-{single,dual}.pcap)
@@ -73,7 +74,7 @@ std::vector<test::Record> records(const std::vector<Packet>& packets) {
 }
 
 // ---- fuzz_rs_helios: prologue (see fuzz_rs_helios.cpp) + payloads --------------------------------
-enum Flags : std::uint8_t { k16P = 1, kForceDual = 4, kDifopAngles = 8, kTableAngles = 16, kArrivalTime = 32 };
+enum Flags : std::uint8_t { k16P = 1, kForceDual = 4, kFollow = 6, kDifopAngles = 8, kTableAngles = 16, kArrivalTime = 32 };
 
 /// The split-azimuth byte that puts the sweep split inside `payload`'s block azimuths.
 std::uint8_t split_inside(const Bytes& msop) {
@@ -102,6 +103,17 @@ void capture_seeds(SeedWriter& out, const std::string& name, const std::vector<P
   const std::uint8_t split = split_inside(msop_only.at(msop_only.size() / 2).payload);
   const std::int64_t arrival = msop_only.front().time_ns;
   out.write("fuzz_rs_helios", name + "-difop-first", helios_stream(model | kDifopAngles, split, arrival, difop_first));
+  if (has_difop_magic(difop_first.front().payload)) {
+    // The CSV's table, the DIFOP's from the next sweep boundary, then another DIFOP whose first
+    // elevation differs, followed at the boundary after (calibration_updates: follow).
+    std::vector<Packet> difop_mid = msop_only;
+    Packet changed = difop_first.front();
+    changed.payload[468 + 2] ^= 0x10;
+    difop_mid.insert(difop_mid.begin() + 4, changed);
+    difop_mid.insert(difop_mid.begin() + 2, difop_first.front());
+    out.write("fuzz_rs_helios", name + "-difops-mid-sweep-follow",
+              helios_stream(model | kFollow | kDifopAngles | kTableAngles, split, arrival, difop_mid));
+  }
   out.write("fuzz_rs_helios", name + "-table-arrival-time",
             helios_stream(model | kTableAngles | kArrivalTime, split | 0x80, arrival, msop_only));
   // Arrival times that leave the decoder's time range in mid-stream.
@@ -182,6 +194,31 @@ void can_seeds(SeedWriter& out) {
   out.write("fuzz_can_imu", "table-pair", table);
 }
 
+// ---- fuzz_time_sync: prologue + (op, int64, int64) records ----------------------------------------
+void put_reading(Bytes& out, std::uint8_t op, std::int64_t a, std::int64_t b) {
+  out.push_back(op);
+  for (const std::int64_t v : {a, b}) {
+    for (int i = 0; i < 8; ++i) out.push_back(static_cast<std::uint8_t>(static_cast<std::uint64_t>(v) >> (8 * i)));
+  }
+}
+
+void time_sync_seeds(SeedWriter& out) {
+  // A LiDAR 0.5 s behind the host with up to 2 ms of delay, stepping 1 s at the 20th packet;
+  // window 2^31 ns (2.1 s), threshold 2^27 ns (0.13 s), confirm 3; bridge threshold 2^27 ns.
+  constexpr std::int64_t kHost = 1'700'000'000'000'000'000;
+  Bytes tracker{31, 27, 2, 27, 0};
+  for (std::int64_t k = 0; k < 40; ++k) {
+    const std::int64_t header = kHost - 500'000'000 + k * 666'667 + (k >= 20 ? 1'000'000'000 : 0);
+    put_reading(tracker, 0, kHost + k * 666'667 + (k % 7) * 300'000, header);
+    put_reading(tracker, 1, header, k * 666'667);
+  }
+  out.write("fuzz_time_sync", "lidar-offset-and-step", tracker);
+  Bytes pps{31, 27, 2, 27, 0};
+  for (std::int64_t k = 0; k < 4; ++k) put_reading(pps, 2, kHost + k * 1'000'000'000 + 12'345, 0);
+  put_reading(pps, 2, kHost + 450'000'000, 0);  // between seconds: no edge
+  out.write("fuzz_time_sync", "pps-edges", pps);
+}
+
 // ---- fuzz_pose_socket -----------------------------------------------------------------------------
 void pose_seeds(SeedWriter& out) {
   out.write("fuzz_pose_socket", "requests", std::string("json\nscan\r\nbinary \nall\n"));
@@ -215,6 +252,8 @@ void text_seeds(SeedWriter& out) {
 
   const std::string imu = read_text(kSource / "fuzz" / "corpus" / "sim-imu.csv");
   out.write("fuzz_imu_csv", "sim-imu.csv", imu);
+  out.write("fuzz_angles_csv", "comments-tabs-crlf.csv",
+            std::string("# vertical_deg, horizontal_deg\r\n 14.94,\t-4.07\r\n\r\n13.03 , 3.63\r\n-54.6,4.8\n"));
   out.write("fuzz_imu_csv", "comments-crlf.csv",
             std::string("# IMU log\r\n time_s , gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z\r\n\r\n"
                         "1.0,+0.1,-2e-3,0,0.0,0.0,9.81\r\n1.0,0,0,0,0,0,9.8\r\n"));
@@ -236,6 +275,11 @@ int main(int argc, char** argv) {
     } else {
       std::cout << "liod-fuzz-seeds: " << kRealPcap.string() << " not found: no seeds from real packets\n";
     }
+    for (const char* csv : {"helios32_angles.csv", "helios16p_angles.csv"}) {
+      const fs::path path = fs::path(LIOD_SHARED_DIR) / "data" / "robosense" / csv;
+      if (fs::exists(path)) out.write("fuzz_angles_csv", csv, read_text(path));
+    }
+    time_sync_seeds(out);
     mtdata2_seeds(out);
     can_seeds(out);
     pose_seeds(out);

@@ -135,6 +135,8 @@ void declare_sensors(Schema& s, SensorConfig& c) {
   s.real("lidar.max_range_m", &c.lidar.max_range_m, 1.0, 500.0);
   s.real("lidar.split_azimuth_deg", &c.lidar.split_azimuth_deg, 0.0, 359.99);
   s.integer("lidar.packets_before_difop", &c.lidar.packets_before_difop, 0, 65536);
+  s.choice("lidar.calibration_updates", &c.lidar.calibration_updates,
+           {{"pin", CalibrationUpdates::kPin}, {"follow", CalibrationUpdates::kFollow}});
 
   auto& dl = c.drivers.lidar;
   s.text("drivers.lidar.bind_address", &dl.bind_address);
@@ -277,9 +279,16 @@ void validate_relations(const Config& c, const std::string& origin) {
       throw ConfigError(origin + ": key 'pose_socket.mode' = '" + m + "': must be octal permission bits, e.g. 0660");
     }
   }
-  if (c.drivers.imu.transport == ImuTransport::kCan && c.drivers.imu.can_profile == CanProfile::kTable &&
-      c.drivers.imu.can_signals.empty()) {
-    throw ConfigError(origin + ": key 'drivers.imu.can_signals' = '[]': the table profile needs at least one signal");
+  if (c.drivers.imu.transport == ImuTransport::kCan && c.drivers.imu.can_profile == CanProfile::kTable) {
+    // An axis the table never receives would read 0 as if measured; the decoder emits no sample without it.
+    for (const char* q : {"gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"}) {
+      bool mapped = false;
+      for (const auto& sig : c.drivers.imu.can_signals) mapped = mapped || sig.quantity == q;
+      if (!mapped) {
+        throw ConfigError(origin + ": key 'drivers.imu.can_signals': the table profile needs a signal for each of "
+                          "gyro_x, gyro_y, gyro_z, accel_x, accel_y, accel_z (" + q + " has none)");
+      }
+    }
   }
   static const char* kLevels[] = {"trace", "debug", "info", "warn", "error", "critical", "off"};
   bool level_ok = false;

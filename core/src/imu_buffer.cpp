@@ -15,10 +15,8 @@ constexpr double kGapAccelerationStd = 1.0;  // m/s^2
 }  // namespace
 
 void ImuBuffer::add(const ImuSample& sample) {
-  const bool finite = std::isfinite(sample.time) && sample.gyro.allFinite() && sample.accel.allFinite();
-  // Within the range a sample may be saturated but is a measurement; beyond it, it is not one.
-  const bool in_range = finite && sample.gyro.cwiseAbs().maxCoeff() <= gyro_range_ &&
-                        sample.accel.cwiseAbs().maxCoeff() <= accel_range_;
+  // A saturated sample is a measurement (the daemon flags it); one beyond the range is not.
+  const bool in_range = std::isfinite(sample.time) && classify(sample, range_) != ImuReading::OutOfRange;
   if (!in_range || (!samples_.empty() && sample.time <= samples_.back().time)) {
     ++dropped_;
     return;

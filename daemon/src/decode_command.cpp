@@ -42,11 +42,11 @@ std::string sweep_line(const Scan& scan, const drivers::SweepInfo& info) {
   char line[256];
   std::snprintf(line, sizeof line,
                 "sweep %06" PRIu64 "  start %.6f  points %6zu  rings %2d/%u  azimuth %6.2f..%6.2f (%5.1f deg)  "
-                "duration %.4f s%s%s",
+                "duration %.4f s%s%s%s",
                 scan.sequence, scan.start_time, scan.points.size(), std::popcount(rings),
                 static_cast<unsigned>(scan.beam_count), info.first_azimuth * 0.01, info.last_azimuth * 0.01,
                 info.azimuth_coverage_deg, scan.end_time - scan.start_time, info.ended_by_gap ? "  [cut by time gap]" : "",
-                info.flushed ? "  [partial, end of file]" : "");
+                info.truncated ? "  [cut at the size cap]" : "", info.flushed ? "  [partial, end of file]" : "");
   return line;
 }
 
@@ -60,7 +60,7 @@ void print_counts(const drivers::HeliosStats& h, const drivers::PcapStats& p, st
       << p.truncated_record << ", ip_fragment " << p.ip_fragment << ", not_ipv4 " << p.not_ipv4 << ", not_udp "
       << p.not_udp << ", malformed " << p.malformed << ", unsupported_link " << p.unsupported_link
       << "), truncated_file " << p.truncated_file << "; sweeps " << h.sweeps << " (+" << h.partial_sweeps_dropped
-      << " partial dropped)\n";
+      << " partial dropped, " << h.truncated_sweeps << " cut at the size cap)\n";
 }
 
 }  // namespace

@@ -30,7 +30,8 @@ std::uint32_t status_flags(std::uint32_t odometry_status) {
 
 std::uint32_t with_ok(std::uint32_t f) {
   constexpr std::uint32_t kBad = pose::kInitializing | pose::kDegenerate | pose::kImuLost | pose::kLidarLost |
-                                 pose::kImuInconsistent | pose::kImplausible;
+                                 pose::kImuInconsistent | pose::kImplausible | pose::kSweepTruncated |
+                                 pose::kCalibrationChanged | pose::kImuSaturated;
   return (f & kBad) == 0 ? f | pose::kOk : f;
 }
 
@@ -237,6 +238,7 @@ void Pipeline::note_host_clock_jump() noexcept {
 }
 
 bool Pipeline::make_imu_pose(const ImuItem& item, PoseEvent& ev) {
+  if ((item.sample.flags & ImuSample::kSaturated) != 0) imu_saturated_time_ = item.sample.time;
   const auto state = propagator_.add(item.sample);
   if (!state) return false;
   const ScanAnchor& anchor = *propagator_.anchor();
@@ -254,6 +256,7 @@ bool Pipeline::make_imu_pose(const ImuItem& item, PoseEvent& ev) {
   ev.message.covariance = anchor.pose_covariance;  // of the last scan update (not propagated)
   std::uint32_t f = anchor.flags;
   if (dead_reckoned_s > config_.drivers.lidar.lost_after_s) f |= pose::kLidarLost;
+  if (imu_saturated_time_ > anchor.state.time) f |= pose::kImuSaturated;  // integrated a clipped sample
   // The anchor's covariance was checked with its scan; what the IMU adds can still overflow.
   if (check_state(*state, state_limits_) != StateFault::kNone) {
     f |= pose::kImplausible;
@@ -335,6 +338,10 @@ struct Pipeline::OdometryLoop {
   bool have_held = false;
   Eigen::Vector3d last_gyro = Eigen::Vector3d::Zero();
   PoseEvent imu_event;
+  // Data times of the last clipped IMU sample fed and of the last scan pose: a scan whose interval
+  // held a clipped sample was predicted and deskewed with it.
+  double last_saturated = -std::numeric_limits<double>::infinity();
+  double previous_scan_time = -std::numeric_limits<double>::infinity();
   void retire_front() {
     spare = std::move(pending.front());
     pending.pop_front();
@@ -346,6 +353,7 @@ void Pipeline::feed_imu(OdometryLoop& loop, const ImuItem& item) {
   ++totals_.imu_fed;
   odometry_imu_dropped_.store(loop.odometry.dropped_imu_samples(), std::memory_order_relaxed);
   loop.last_gyro = item.sample.gyro;
+  if ((item.sample.flags & ImuSample::kSaturated) != 0) loop.last_saturated = item.sample.time;
   // Live, the IMU thread makes the IMU-rate poses (publish_imu_pose).
   if (loop.lockstep && loop.imu_poses && make_imu_pose(item, loop.imu_event)) push_pose(loop.imu_event);
 }
@@ -373,6 +381,10 @@ void Pipeline::process_scan(OdometryLoop& loop, ScanItem& item) {
   std::uint32_t f = scan_flags | live_flags(result->state.time);
   f &= ~static_cast<std::uint32_t>(pose::kLidarLost);  // this pose comes from a scan
   if (item.clock_jump) f |= pose::kClockJump;
+  if (item.sweep_truncated) f |= pose::kSweepTruncated;
+  if (item.calibration_changed) f |= pose::kCalibrationChanged;
+  if (loop.last_saturated > loop.previous_scan_time) f |= pose::kImuSaturated;
+  loop.previous_scan_time = result->state.time;
   ev.message.flags = with_ok(f);
   ev.diagnostics = scan_diagnostics(*result, item.features_ms);
   ev.input_steady_ns = item.ready_steady_ns - item.queued_ns;
@@ -384,7 +396,8 @@ void Pipeline::process_scan(OdometryLoop& loop, ScanItem& item) {
     // IMU-rate poses are as (un)reliable as the scan they start from: while it is initialising
     // they are flagged so; before any speed is known (the first scan) there are none: dead
     // reckoning at zero speed from a rolling start would run away.
-    const ScanAnchor anchor{result->state, loop.odometry.gravity(), ev.message.covariance, scan_flags & kInheritedFlags};
+    const ScanAnchor anchor{result->state, loop.odometry.gravity(), ev.message.covariance,
+                            (scan_flags & kInheritedFlags) | (f & (pose::kSweepTruncated | pose::kCalibrationChanged))};
     if (loop.lockstep) propagator_.set_anchor(anchor);
     else anchors_.publish(anchor);
   }

@@ -19,6 +19,9 @@ drivers::HeliosOptions helios_options(const Config& config) {
   o.msop.max_range_m = static_cast<float>(config.lidar.max_range_m);
   o.split_azimuth_deg = config.lidar.split_azimuth_deg;
   o.max_held_packets = static_cast<std::size_t>(config.lidar.packets_before_difop);
+  o.calibration_updates = config.lidar.calibration_updates == CalibrationUpdates::kFollow
+                              ? drivers::CalibrationUpdates::Follow
+                              : drivers::CalibrationUpdates::Pin;
   return o;
 }
 
@@ -37,7 +40,7 @@ LidarOutput::LidarOutput(const Config& config, drivers::SpscRing<ScanItem>& ring
       extractor_(LidarInertialOdometry::feature_params(config)) {
   if (bridge_clock_steps) bridge_.emplace(static_cast<std::int64_t>(config.time.jump_threshold_s * 1e9));
   decoder_ = std::make_unique<drivers::RsHeliosDecoder>(helios_options(config),
-                                                        [this](Scan& scan, const drivers::SweepInfo&) { on_sweep(scan); });
+                                                        [this](Scan& scan, const drivers::SweepInfo& info) { on_sweep(scan, info); });
   heartbeat();
 }
 
@@ -112,13 +115,23 @@ void LidarOutput::track_time(std::int64_t header_ns, std::int64_t arrival_ns) {
   }
 }
 
-void LidarOutput::on_sweep(Scan& scan) {
+void LidarOutput::on_sweep(Scan& scan, const drivers::SweepInfo& info) {
+  if (info.truncated) {
+    // The azimuth did not cross the split for a revolution and more: the points are not where the
+    // packets put them (a stuck azimuth) or all in one direction (a stalled motor). The odometry
+    // gets no such sweep; the next one it gets says so, and no sweep counts as LiDAR alive.
+    truncated_since_last_ = true;
+    return;
+  }
   const auto& difop = decoder_->last_difop();
   const bool synced = difop.has_value() && difop->time_sync_status != 0;
   synced_.store(synced, std::memory_order_relaxed);
   const std::uint64_t jumps = offset_.jumps();
   item_.clock_jump = (synced && !sensor_agrees()) || jumps != jumps_at_last_sweep_;
   jumps_at_last_sweep_ = jumps;
+  item_.sweep_truncated = truncated_since_last_;
+  truncated_since_last_ = false;
+  item_.calibration_changed = info.calibration_changed;
   if (shift_ns_ != 0) {
     const double o = static_cast<double>(shift_ns_) * 1e-9;
     scan.start_time += o;
@@ -167,6 +180,17 @@ void ImuOutput::sample(const ImuSample& delivered) {
   heartbeat_.store(now, std::memory_order_relaxed);
   if (tap) tap(delivered);
   ImuSample s = delivered;
+  switch (classify(s, range)) {
+    case ImuReading::OutOfRange:
+      out_of_range_.fetch_add(1, std::memory_order_relaxed);
+      return;
+    case ImuReading::Saturated:
+      s.flags |= ImuSample::kSaturated;
+      saturated_.fetch_add(1, std::memory_order_relaxed);
+      break;
+    case ImuReading::Valid:
+      break;
+  }
   if (bridge_) {
     // Bridged without the PPS correction the transport added: that one is meant to move the time.
     const std::int64_t pps = pps_correction_ns.load(std::memory_order_relaxed);

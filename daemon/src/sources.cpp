@@ -9,6 +9,7 @@
 #include "liod/drivers/can_imu.hpp"
 #include "liod/drivers/imu_csv.hpp"
 #include "liod/drivers/mtdata2.hpp"
+#include "liod/drivers/rs_helios.hpp"
 #include "liod/drivers/serial_port.hpp"
 #include "liod/drivers/time_sync.hpp"
 #include "liod/drivers/udp_receiver.hpp"
@@ -56,6 +57,25 @@ std::int64_t first_imu_time_ns(const std::string& path) {
   return reader.next(s) ? static_cast<std::int64_t>(std::llround(s.time * 1e9)) : 0;
 }
 
+namespace {
+
+/// Logs once which sender the LiDAR's datagrams are taken from, and once that others are refused.
+void report_source(const drivers::SourceFilter& filter, bool& reported_lock, bool& reported_other) {
+  if (!reported_lock && filter.source() != 0) {
+    spdlog::info("LiDAR: taking datagrams from {} only (the first RS-Helios sender; set "
+                 "drivers.lidar.source_address to choose)", drivers::format_ipv4(filter.source()));
+    reported_lock = true;
+  }
+  if (!reported_other && filter.refused() > 0) {
+    spdlog::warn("LiDAR: dropping datagrams from {}, not the LiDAR at {} (this and any other sender: counted in "
+                 "health lidar.transport_refused, not logged again)",
+                 drivers::format_ipv4(filter.last_refused()), drivers::format_ipv4(filter.source()));
+    reported_other = true;
+  }
+}
+
+}  // namespace
+
 // ---- files -------------------------------------------------------------------------------------
 PcapLidarSource::PcapLidarSource(std::string path, std::vector<std::uint16_t> ports, std::shared_ptr<const PaceClock> pace)
     : path_(std::move(path)), ports_(std::move(ports)), pace_(std::move(pace)) {}
@@ -65,10 +85,19 @@ void PcapLidarSource::run(LidarOutput& out, const std::atomic<bool>& stop) {
   reader.set_port_filter(ports_);
   drivers::UdpDatagram d;
   std::uintmax_t bytes = 0;
+  // A capture may hold every sender on the ports (tcpdump): taken as the socket would take them.
+  drivers::SourceFilter filter(0, drivers::is_helios_packet);
+  bool reported_lock = true;  // a replay names no sender unless another one is refused
+  bool reported_other = false;
   while (reader.next(d)) {
     if (!pace_->wait_until(d.capture_time_ns, stop, [&] { out.heartbeat(); })) break;
     bytes += d.payload.size() + 58;
     bytes_.store(bytes, std::memory_order_relaxed);
+    if (!filter.accept(d.src_ip, d.payload)) {
+      out.transport.refused.store(filter.refused(), std::memory_order_relaxed);
+      report_source(filter, reported_lock, reported_other);
+      continue;
+    }
     out.packet(d.payload, d.capture_time_ns, d.dst_port);
   }
   stats_ = reader.stats();
@@ -90,6 +119,7 @@ void CsvImuSource::run(ImuOutput& out, const std::atomic<bool>& stop) {
 }
 
 // ---- UDP LiDAR ---------------------------------------------------------------------------------
+
 UdpLidarSource::UdpLidarSource(const Config& config) : config_(config) {}
 
 std::string UdpLidarSource::describe() const {
@@ -107,6 +137,9 @@ void UdpLidarSource::run(LidarOutput& out, const std::atomic<bool>& stop) {
   o.multicast_group = d.multicast_group;
   o.multicast_interface = d.multicast_interface;
   o.source_address = d.source_address;
+  // Without a configured address, the sensor is the first sender of an RS-Helios packet: anyone
+  // else who reaches the port (the sockets listen on every interface by default) is dropped.
+  o.lock_to_first_sender_of = drivers::is_helios_packet;
   o.receive_buffer_bytes = d.receive_buffer_bytes;
   o.batch = d.batch;
   drivers::UdpReceiver receiver(o);
@@ -116,6 +149,8 @@ void UdpLidarSource::run(LidarOutput& out, const std::atomic<bool>& stop) {
   }
   spdlog::info("LiDAR: listening on {}", describe());
   std::uint64_t reported_kernel_drops = 0;
+  bool reported_lock = !d.source_address.empty();
+  bool reported_other = false;
   while (!stop.load(std::memory_order_relaxed)) {
     out.heartbeat();
     std::int64_t now = 0;  // one clock read per batch: the batch was taken at once
@@ -130,6 +165,7 @@ void UdpLidarSource::run(LidarOutput& out, const std::atomic<bool>& stop) {
     const auto& rs = receiver.stats();
     out.transport.lost.store(rs.kernel_drops, std::memory_order_relaxed);
     out.transport.refused.store(rs.filtered_source + rs.truncated, std::memory_order_relaxed);
+    report_source(receiver.source_filter(), reported_lock, reported_other);
     const auto drops = rs.kernel_drops;
     if (drops > reported_kernel_drops) {
       spdlog::warn("LiDAR: the kernel dropped {} datagrams (receive buffer full)", drops - reported_kernel_drops);
@@ -170,6 +206,7 @@ void SerialImuSource::run(ImuOutput& out, const std::atomic<bool>& stop) {
     s.time = static_cast<double>(t + out.pps_correction_ns.load(std::memory_order_relaxed)) * 1e-9;
     s.gyro = *m.rate_of_turn;
     s.accel = *m.acceleration;
+    if (m.status_word && drivers::xsens::inertial_clipped(*m.status_word)) s.flags |= ImuSample::kSaturated;
     out.sample(s);
   });
   std::vector<std::uint8_t> buffer(4096);
@@ -221,7 +258,7 @@ void CanImuSource::run(ImuOutput& out, const std::atomic<bool>& stop) {
         out.heartbeat();
         if (!can.read(frame, 50)) continue;
         auto s = decoder.feed(frame);
-        out.transport.lost.store(decoder.stats().unpaired, std::memory_order_relaxed);
+        out.transport.lost.store(decoder.stats().unpaired + decoder.stats().stale_axes, std::memory_order_relaxed);
         out.transport.refused.store(decoder.stats().not_available, std::memory_order_relaxed);
         if (s) {
           s->time += static_cast<double>(out.pps_correction_ns.load(std::memory_order_relaxed)) * 1e-9;

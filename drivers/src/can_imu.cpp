@@ -124,11 +124,20 @@ std::optional<ImuSample> CanImuDecoder::feed_table(const CanFrame& f) {
     }
     const int q = quantity_index(sig.quantity);
     if (q < 0) continue;
-    values_[static_cast<std::size_t>(q)] = raw * sig.scale + sig.offset;
+    const auto k = static_cast<std::size_t>(q);
+    values_[k] = raw * sig.scale + sig.offset;
+    value_times_ns_[k] = f.time_ns;
+    received_[k] = true;
     matched = true;
     if (q == 0) completes = true;
   }
   if (!matched || !completes) return std::nullopt;
+  for (std::size_t k = 0; k < values_.size(); ++k) {
+    if (!received_[k] || f.time_ns - value_times_ns_[k] > max_pair_age_ns_) {
+      ++stats_.stale_axes;
+      return std::nullopt;
+    }
+  }
   ImuSample s;
   s.time = static_cast<double>(f.time_ns) * 1e-9;
   s.gyro = Eigen::Vector3d(values_[0], values_[1], values_[2]);

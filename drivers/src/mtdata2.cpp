@@ -121,6 +121,9 @@ bool MtData2Parser::decode_payload(std::span<const std::uint8_t> d, MtData2Sampl
         if (size == 12) out.acceleration = vec3(p);
         if (out.acceleration && !out.acceleration->allFinite()) return false;
         break;
+      case kStatusWord:
+        if (size == 4) out.status_word = load_be32(p);
+        break;
       default:
         break;  // FreeAcceleration and everything else: skipped by size
     }
@@ -146,7 +149,7 @@ std::vector<std::uint8_t> build_xbus_message(std::uint8_t mid, const std::vector
 }
 
 std::vector<std::uint8_t> build_mtdata2(std::uint16_t counter, std::uint32_t fine, const Eigen::Vector3d& gyro,
-                                        const Eigen::Vector3d& accel) {
+                                        const Eigen::Vector3d& accel, std::optional<std::uint32_t> status_word) {
   std::vector<std::uint8_t> data;
   std::uint8_t b[12];
   store_be16(b, counter);
@@ -157,6 +160,10 @@ std::vector<std::uint8_t> build_mtdata2(std::uint16_t counter, std::uint32_t fin
   put_item(data, kRateOfTurn, std::span(b, 12));
   for (int k = 0; k < 3; ++k) store_be32(b + 4 * k, std::bit_cast<std::uint32_t>(static_cast<float>(accel[k])));
   put_item(data, kAcceleration, std::span(b, 12));
+  if (status_word) {
+    store_be32(b, *status_word);
+    put_item(data, kStatusWord, std::span(b, 4));
+  }
   return build_xbus_message(kMidMtData2, data);
 }
 

@@ -1,5 +1,6 @@
 #include "liod/drivers/rs_helios.hpp"
 
+#include <algorithm>
 #include <span>
 #include <utility>
 
@@ -24,10 +25,17 @@ constexpr std::uint32_t kMaxPlausibleLoss = 100000;
 
 }  // namespace
 
+bool is_helios_packet(std::span<const std::uint8_t> payload) noexcept {
+  if (payload.size() != helios::kPacketBytes) return false;
+  return has_difop_magic(payload) ||
+         std::equal(helios::kMsopMagic.begin(), helios::kMsopMagic.end(), payload.begin());
+}
+
 RsHeliosDecoder::RsHeliosDecoder(HeliosOptions options, SweepCallback on_sweep)
     : options_(std::move(options)),
+      on_sweep_(std::move(on_sweep)),
       msop_(options_.model, options_.msop),
-      sweeps_(sweep_options(options_), std::move(on_sweep)) {
+      sweeps_(sweep_options(options_), [this](Scan& scan, const SweepInfo& info) { on_assembled(scan, info); }) {
   if (options_.angles) {
     const std::size_t rows = options_.angles->size();
     if (rows != beam_count(options_.model))
@@ -44,6 +52,8 @@ HeliosStats RsHeliosDecoder::stats() const noexcept {
   s.sweeps = sweeps_.sweeps_emitted();
   s.partial_sweeps_dropped = sweeps_.partial_sweeps_dropped();
   s.time_gaps = sweeps_.time_gaps();
+  s.truncated_sweeps = sweeps_.truncated_sweeps();
+  s.largest_sweep_points = sweeps_.largest_sweep_points();
   s.duplicate_packets = sweeps_.duplicate_packets();
   s.late_packets = sweeps_.late_packets();
   s.late_packets_dropped = sweeps_.late_packets_dropped();
@@ -61,7 +71,7 @@ bool RsHeliosDecoder::packet_is_dual(std::span<const std::uint8_t> payload) cons
     case ReturnModePolicy::Auto:
       break;
   }
-  if (difop_) return difop_->dual_return();
+  if (applied_) return applied_->return_mode == helios::kReturnDual;
   return options_.model == HeliosModel::Helios5515 && MsopDecoder::looks_dual_return(payload);
 }
 
@@ -117,8 +127,32 @@ PacketKind RsHeliosDecoder::feed(std::span<const std::uint8_t> payload, std::int
     have_azimuth_ = true;
     last_azimuth_ = packet_.blocks[packet_.block_count - 1].azimuth;
   }
-  sweeps_.add(packet_);
+  add_to_sweeps(payload, arrival_ns);
   return PacketKind::Msop;
+}
+
+void RsHeliosDecoder::add_to_sweeps(std::span<const std::uint8_t> payload, std::int64_t arrival_ns) {
+  const std::size_t boundary = pending_ ? sweeps_.next_sweep_block(packet_) : packet_.block_count;
+  if (boundary >= packet_.block_count) {
+    sweeps_.add(packet_);
+    return;
+  }
+  sweeps_.add_blocks(packet_, 0, boundary);
+  apply_pending(sweeps_.sweep_open());
+  // The blocks from the boundary on begin the next sweep: decoded again, with its calibration.
+  last_dual_ = packet_is_dual(payload);
+  const MsopStatus again = msop_.decode(payload, last_dual_, arrival_ns, packet_, header_);
+  if (again != MsopStatus::Ok && again != MsopStatus::Partial) return;
+  if (boundary == 0) sweeps_.add(packet_);
+  else sweeps_.add_blocks(packet_, boundary, packet_.block_count);
+}
+
+void RsHeliosDecoder::on_assembled(Scan& scan, const SweepInfo& info) {
+  SweepInfo flagged = info;
+  flagged.calibration_changed = flag_open_sweep_;
+  flag_open_sweep_ = disagrees_ || changed_at_next_start_;
+  changed_at_next_start_ = false;
+  on_sweep_(scan, flagged);
 }
 
 void RsHeliosDecoder::on_msop_header(const MsopHeader& header) {
@@ -137,16 +171,77 @@ void RsHeliosDecoder::on_msop_header(const MsopHeader& header) {
   last_counter_ = counter;
 }
 
+bool RsHeliosDecoder::Calibration::differs_from(const Calibration& in_use) const noexcept {
+  // A DIFOP without a usable angle table says nothing about the angles (it is counted as rejected).
+  return motor_rpm != in_use.motor_rpm || return_mode != in_use.return_mode ||
+         (has_angles && (!in_use.has_angles || angles.vertical_deg != in_use.angles.vertical_deg ||
+                         angles.horizontal_deg != in_use.angles.horizontal_deg));
+}
+
+RsHeliosDecoder::Calibration RsHeliosDecoder::calibration_of(const HeliosDifop& difop) const noexcept {
+  Calibration c;
+  c.motor_rpm = difop.motor_rpm;
+  c.return_mode = difop.return_mode;
+  c.has_angles = difop.angles_valid && options_.use_difop_angles;
+  if (c.has_angles) c.angles = difop.angles;
+  return c;
+}
+
+void RsHeliosDecoder::apply(const Calibration& c) {
+  msop_.set_rotation_hz(c.motor_rpm == 0 ? helios::kDefaultRotationHz : c.motor_rpm / 60.0);
+  // The 16P's DIFOP carries 32 rows; its lasers are the first 16 (slot % 16, §8).
+  if (c.has_angles)
+    msop_.set_angles(std::span<const double>(c.angles.vertical_deg), std::span<const double>(c.angles.horizontal_deg));
+  applied_ = c;
+}
+
+void RsHeliosDecoder::take(const Calibration& c, bool flag) {
+  Calibration next = c;
+  if (!next.has_angles && applied_) {  // the angles in use stay when the DIFOP has none
+    next.has_angles = committed().has_angles;
+    next.angles = committed().angles;
+  }
+  pending_ = next;
+  pending_flags_ = flag;
+  if (!sweeps_.sweep_open()) apply_pending(false);
+}
+
+void RsHeliosDecoder::apply_pending(bool sweep_open) {
+  apply(*pending_);
+  pending_.reset();
+  // With a sweep open, the boundary ends it (its callback comes next); else the next sweep begins.
+  if (pending_flags_) (sweep_open ? changed_at_next_start_ : flag_open_sweep_) = true;
+  pending_flags_ = false;
+}
+
 void RsHeliosDecoder::on_difop(const HeliosDifop& difop) {
   ++stats_.difop;
   difop_ = difop;
-  msop_.set_rotation_hz(difop.rotation_hz());
-  if (!difop.angles_valid) {
-    ++stats_.difop_angles_rejected;
-  } else if (options_.use_difop_angles) {
-    // The 16P's DIFOP carries 32 rows; its lasers are the first 16 (slot % 16, §8).
-    msop_.set_angles(std::span<const double>(difop.angles.vertical_deg),
-                     std::span<const double>(difop.angles.horizontal_deg));
+  if (!difop.angles_valid) ++stats_.difop_angles_rejected;
+  const Calibration c = calibration_of(difop);
+  // The angles are pinned by the first DIFOP that has a usable table (until then the CSV's, a
+  // fallback, are in use), the rest by the first DIFOP.
+  Calibration known = applied_ ? committed() : c;
+  const bool first_table = c.has_angles && !known.has_angles;
+  if (first_table) {
+    known.has_angles = true;
+    known.angles = c.angles;
+  }
+  if (!applied_ || !msop_.has_angles() || (first_table && !c.differs_from(known))) {
+    // The first calibration: taken, at the next sweep boundary if packets decoded with the CSV's
+    // table are in a sweep (with no table at all none can be).
+    take(c, false);
+    disagrees_ = false;
+  } else if (c.differs_from(known)) {
+    ++stats_.calibration_changes;
+    if (options_.calibration_updates == CalibrationUpdates::Follow) {
+      take(c, true);
+    } else {
+      disagrees_ = true;
+      flag_open_sweep_ = true;
+    }
+  } else {
+    disagrees_ = false;
   }
   decode_held();
 }

@@ -51,7 +51,7 @@ bool SweepAssembler::repeats_recent(const PacketPoints& packet) noexcept {
 }
 
 void SweepAssembler::add_late(const PacketPoints& packet) {
-  if (packet.time_ns < reference_ns_) {
+  if (packet.time_ns < reference_ns_ || info_.blocks + packet.block_count > options_.max_blocks) {
     ++late_dropped_;
     return;
   }
@@ -72,40 +72,78 @@ void SweepAssembler::add_late(const PacketPoints& packet) {
   points.insert(at, rebased.begin(), rebased.begin() + static_cast<std::ptrdiff_t>(packet.point_count));
 }
 
-void SweepAssembler::add(const PacketPoints& packet) {
-  if (packet.block_count == 0) return;
-  if (repeats_recent(packet)) {
-    ++duplicates_;
-    return;
+std::int64_t SweepAssembler::block_time_ns(const PacketPoints& packet, std::size_t b) noexcept {
+  return packet.time_ns + static_cast<std::int64_t>(std::llround(static_cast<double>(packet.blocks[b].time_offset_s) * 1e9));
+}
+
+SweepAssembler::Boundary SweepAssembler::boundary(std::int64_t last_ns, std::uint16_t last_az, std::uint32_t blocks,
+                                                  std::int64_t block_ns, std::uint16_t az) const noexcept {
+  const double gap_s = static_cast<double>(block_ns - last_ns) * 1e-9;
+  if (gap_s < 0.0 || gap_s > options_.max_block_gap_s) return Boundary::Gap;
+  if (crosses_split(last_az, az)) return Boundary::Split;
+  if (blocks >= options_.max_blocks) return Boundary::Full;
+  return Boundary::None;
+}
+
+bool SweepAssembler::is_late(const PacketPoints& packet) const noexcept {
+  const double late_s = static_cast<double>(last_block_ns_ - block_time_ns(packet, 0)) * 1e-9;
+  return open_ && late_s > 0.0 && late_s <= options_.max_block_gap_s;
+}
+
+std::size_t SweepAssembler::next_sweep_block(const PacketPoints& packet) const noexcept {
+  if (!open_) return 0;
+  const PacketKey key{packet.time_ns, packet.blocks[0].azimuth};
+  if (packet.block_count == 0 || is_late(packet) ||
+      std::find(recent_packets_.begin(), recent_packets_.end(), key) != recent_packets_.end())
+    return packet.block_count;
+  std::int64_t last_ns = last_block_ns_;
+  std::uint16_t last_az = last_azimuth_;
+  std::uint32_t blocks = info_.blocks;
+  for (std::size_t b = 0; b < packet.block_count; ++b, ++blocks) {
+    const std::int64_t block_ns = block_time_ns(packet, b);
+    if (boundary(last_ns, last_az, blocks, block_ns, packet.blocks[b].azimuth) != Boundary::None) return b;
+    last_ns = block_ns;
+    last_az = packet.blocks[b].azimuth;
   }
-  const std::int64_t first_block_ns =
-      packet.time_ns + static_cast<std::int64_t>(std::llround(static_cast<double>(packet.blocks[0].time_offset_s) * 1e9));
-  const double late_s = static_cast<double>(last_block_ns_ - first_block_ns) * 1e-9;
-  if (open_ && late_s > 0.0 && late_s <= options_.max_block_gap_s) {
-    add_late(packet);
-    return;
+  return packet.block_count;
+}
+
+void SweepAssembler::add(const PacketPoints& packet) { add_blocks(packet, 0, packet.block_count); }
+
+void SweepAssembler::add_blocks(const PacketPoints& packet, std::size_t first, std::size_t end) {
+  end = std::min(end, packet.block_count);
+  if (first >= end) return;
+  if (first == 0) {
+    if (repeats_recent(packet)) {
+      ++duplicates_;
+      return;
+    }
+    if (is_late(packet)) {
+      add_late(packet);
+      return;
+    }
   }
   bool counted_packet = false;
-  for (std::size_t b = 0; b < packet.block_count; ++b) {
+  for (std::size_t b = first; b < end; ++b) {
     const FiringBlock& block = packet.blocks[b];
-    const std::int64_t block_ns =
-        packet.time_ns + static_cast<std::int64_t>(std::llround(static_cast<double>(block.time_offset_s) * 1e9));
+    const std::int64_t block_ns = block_time_ns(packet, b);
     if (!open_) {
       start_sweep(block_ns, block.azimuth);
     } else {
-      const double gap_s = static_cast<double>(block_ns - last_block_ns_) * 1e-9;
-      const bool gap = gap_s < 0.0 || gap_s > options_.max_block_gap_s;
-      if (gap) ++time_gaps_;
-      if (gap || crosses_split(last_azimuth_, block.azimuth)) {
-        const std::int32_t step = (block.azimuth - last_azimuth_ + kFullCircle) % kFullCircle;
-        if (!gap && step <= kMaxFiringStep) info_.azimuth_coverage_deg += step * 0.01;
-        info_.ended_by_gap = gap;
+      const Boundary ends = boundary(last_block_ns_, last_azimuth_, info_.blocks, block_ns, block.azimuth);
+      const std::int32_t step = (block.azimuth - last_azimuth_ + kFullCircle) % kFullCircle;
+      if (ends != Boundary::Gap && step <= kMaxFiringStep) info_.azimuth_coverage_deg += step * 0.01;
+      if (ends != Boundary::None) {
+        info_.ended_by_gap = ends == Boundary::Gap;
+        // A sweep that began at a cut holds what was left of the run that never crossed the split.
+        const bool began_at_cut = info_.truncated;
+        info_.truncated = began_at_cut || ends == Boundary::Full;
+        if (ends == Boundary::Gap) ++time_gaps_;
+        if (info_.truncated) ++truncated_;
         finish_sweep();
         start_sweep(block_ns, block.azimuth);
+        info_.truncated = ends == Boundary::Full;
         counted_packet = false;
-      } else {
-        const std::int32_t step = (block.azimuth - last_azimuth_ + kFullCircle) % kFullCircle;
-        if (step <= kMaxFiringStep) info_.azimuth_coverage_deg += step * 0.01;
       }
     }
     if (!counted_packet) {
@@ -119,8 +157,8 @@ void SweepAssembler::add(const PacketPoints& packet) {
 
     // Rebase the block's points from packet time onto the sweep's reference time.
     const double packet_to_ref_s = static_cast<double>(packet.time_ns - reference_ns_) * 1e-9;
-    const std::size_t end = std::size_t{block.first_point} + block.point_count;
-    for (std::size_t i = block.first_point; i < end; ++i) {
+    const std::size_t end_point = std::size_t{block.first_point} + block.point_count;
+    for (std::size_t i = block.first_point; i < end_point; ++i) {
       LidarPoint p = packet.points[i];
       p.time = static_cast<float>(packet_to_ref_s + static_cast<double>(p.time));
       current_.points.push_back(p);
@@ -146,6 +184,7 @@ void SweepAssembler::finish_sweep() {
   current_.start_time = reference_s + static_cast<double>(t_min);
   current_.end_time = reference_s + static_cast<double>(t_max);
   current_.sequence = next_sequence_++;
+  largest_points_ = std::max(largest_points_, current_.points.size());
   current_.beam_count = options_.beam_count;
   on_sweep_(current_, info_);
   current_.points.clear();
@@ -156,6 +195,7 @@ void SweepAssembler::flush() {
   if (!open_) return;
   if (options_.emit_partial_on_flush && info_.blocks > 0) {
     info_.flushed = true;
+    if (info_.truncated) ++truncated_;
     finish_sweep();
   } else {
     ++partial_dropped_;

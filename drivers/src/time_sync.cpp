@@ -17,14 +17,36 @@ std::int64_t clock_ns(clockid_t id) noexcept {
   ::clock_gettime(id, &ts);
   return static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
 }
+
+// The readings come from outside (header times, capture times of a file, SampleTimeFine counts):
+// any two int64 may meet here, and their sum or difference must stay defined. Held at the range's
+// ends, a wild reading still reads as far off, with its sign.
+std::int64_t saturating_sub(std::int64_t a, std::int64_t b) noexcept {
+  std::int64_t r = 0;
+  if (!__builtin_sub_overflow(a, b, &r)) return r;
+  return a < 0 ? std::numeric_limits<std::int64_t>::min() : std::numeric_limits<std::int64_t>::max();
+}
+
+std::int64_t saturating_add(std::int64_t a, std::int64_t b) noexcept {
+  std::int64_t r = 0;
+  if (!__builtin_add_overflow(a, b, &r)) return r;
+  return a < 0 ? std::numeric_limits<std::int64_t>::min() : std::numeric_limits<std::int64_t>::max();
+}
+
+/// |a - b|, exact for any two int64.
+std::uint64_t distance(std::int64_t a, std::int64_t b) noexcept {
+  const auto ua = static_cast<std::uint64_t>(a);
+  const auto ub = static_cast<std::uint64_t>(b);
+  return a >= b ? ua - ub : ub - ua;
+}
 }  // namespace
 
 std::int64_t realtime_ns() noexcept { return clock_ns(CLOCK_REALTIME); }
 std::int64_t monotonic_ns() noexcept { return clock_ns(CLOCK_MONOTONIC); }
 
 std::int64_t OffsetTracker::add(std::int64_t local_ns, std::int64_t remote_ns) {
-  const std::int64_t diff = local_ns - remote_ns;
-  if (!window_.empty() && std::llabs(diff - window_.front().diff) > jump_ns_) {
+  const std::int64_t diff = saturating_sub(local_ns, remote_ns);
+  if (!window_.empty() && distance(diff, window_.front().diff) > static_cast<std::uint64_t>(jump_ns_)) {
     // Either a delayed packet (only upwards, and bounded in practice) or a clock jump: a jump
     // shows on every following sample too.
     if (++outliers_ < confirm_) return offset_ns();
@@ -34,7 +56,7 @@ std::int64_t OffsetTracker::add(std::int64_t local_ns, std::int64_t remote_ns) {
   outliers_ = 0;
   while (!window_.empty() && window_.back().diff >= diff) window_.pop_back();
   window_.push_back({local_ns, diff});
-  while (window_.size() > 1 && window_.front().local < local_ns - window_ns_) window_.pop_front();
+  while (window_.size() > 1 && window_.front().local < saturating_sub(local_ns, window_ns_)) window_.pop_front();
   return window_.front().diff;
 }
 
@@ -54,12 +76,12 @@ std::int64_t ClockJumpDetector::check() noexcept {
 
 std::int64_t ClockStepBridge::correct(std::int64_t data_ns, std::int64_t arrival_ns) noexcept {
   if (have_previous_) {
-    const std::int64_t data_dt = data_ns - previous_data_ns_;
-    const std::int64_t arrival_dt = arrival_ns - previous_arrival_ns_;
-    if (data_dt - arrival_dt > threshold_ns_ || data_dt < -threshold_ns_) {
+    const std::int64_t data_dt = saturating_sub(data_ns, previous_data_ns_);
+    const std::int64_t arrival_dt = saturating_sub(arrival_ns, previous_arrival_ns_);
+    if (saturating_sub(data_dt, arrival_dt) > threshold_ns_ || data_dt < -threshold_ns_) {
       const std::int64_t kept = spacing_ns_ >= 0 ? spacing_ns_ : std::max<std::int64_t>(arrival_dt, 0);
-      last_step_ns_ = data_dt - kept;
-      correction_ns_ -= last_step_ns_;
+      last_step_ns_ = saturating_sub(data_dt, kept);
+      correction_ns_ = saturating_sub(correction_ns_, last_step_ns_);
       ++steps_;
     } else if (data_dt >= 0 && data_dt <= threshold_ns_) {
       spacing_ns_ = data_dt;
@@ -68,13 +90,16 @@ std::int64_t ClockStepBridge::correct(std::int64_t data_ns, std::int64_t arrival
   have_previous_ = true;
   previous_data_ns_ = data_ns;
   previous_arrival_ns_ = arrival_ns;
-  return data_ns + correction_ns_;
+  return saturating_add(data_ns, correction_ns_);
 }
 
 std::int64_t pps_edge_correction(std::int64_t edge_ns) noexcept {
   constexpr std::int64_t kSecond = 1000000000;
-  const std::int64_t nearest = ((edge_ns + kSecond / 2) / kSecond) * kSecond;
-  const std::int64_t c = nearest - edge_ns;
+  // From the edge's place within its second, not from the edge plus half a second (that sum
+  // overflows near the end of the range).
+  std::int64_t into_second = edge_ns % kSecond;
+  if (into_second < 0) into_second += kSecond;
+  const std::int64_t c = into_second < kSecond / 2 ? -into_second : kSecond - into_second;
   return std::llabs(c) > 4 * kSecond / 10 ? std::numeric_limits<std::int64_t>::min() : c;
 }
 

@@ -27,8 +27,15 @@ std::uint32_t parse_ipv4(const std::string& text) {
   return ntohl(a.s_addr);
 }
 
-UdpReceiver::UdpReceiver(UdpReceiverOptions options) : options_(std::move(options)) {
-  if (!options_.source_address.empty()) source_filter_ = parse_ipv4(options_.source_address);
+std::string format_ipv4(std::uint32_t address) {
+  return std::to_string(address >> 24) + "." + std::to_string((address >> 16) & 0xFF) + "." +
+         std::to_string((address >> 8) & 0xFF) + "." + std::to_string(address & 0xFF);
+}
+
+UdpReceiver::UdpReceiver(UdpReceiverOptions options)
+    : options_(std::move(options)),
+      filter_(options_.source_address.empty() ? 0 : parse_ipv4(options_.source_address),
+              options_.lock_to_first_sender_of) {
   const std::uint32_t bind_ip = options_.multicast_group.empty() ? parse_ipv4(options_.bind_address) : 0;
   for (const std::uint16_t port : options_.ports) {
     const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
@@ -88,6 +95,14 @@ std::size_t UdpReceiver::poll(int timeout_ms, const Handler& handler) {
   return n;
 }
 
+bool SourceFilter::accept(std::uint32_t src_ip, std::span<const std::uint8_t> payload) {
+  if (source_ == 0 && lock_on_ && lock_on_(payload)) source_ = src_ip;
+  if (source_ == 0 || src_ip == source_) return true;
+  ++refused_;
+  last_refused_ = src_ip;
+  return false;
+}
+
 std::size_t UdpReceiver::drain(std::size_t index, const Handler& handler) {
   const std::size_t batch = buffers_.size() / kSlot;
   auto& msgs = msgs_;
@@ -131,11 +146,11 @@ std::size_t UdpReceiver::drain(std::size_t index, const Handler& handler) {
         ++stats_.truncated;
         continue;
       }
-      if (source_filter_ != 0 && d.src_ip != source_filter_) {
-        ++stats_.filtered_source;
+      d.payload = std::span<const std::uint8_t>(buffers_.data() + static_cast<std::size_t>(i) * kSlot, len);
+      if (!filter_.accept(d.src_ip, d.payload)) {
+        stats_.filtered_source = filter_.refused();
         continue;
       }
-      d.payload = std::span<const std::uint8_t>(buffers_.data() + static_cast<std::size_t>(i) * kSlot, len);
       ++stats_.datagrams;
       stats_.bytes += len;
       handler(d);

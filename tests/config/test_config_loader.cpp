@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -34,6 +35,26 @@ TEST(ConfigLoader, ShippedConfigLoadsAndMatchesDefaults) {
   EXPECT_EQ(config.odometry.beam_range_calibration, defaults.odometry.beam_range_calibration);
   EXPECT_DOUBLE_EQ(config.odometry.post_max_width_m, defaults.odometry.post_max_width_m);
   EXPECT_DOUBLE_EQ(config.odometry.crossing_edge_tolerance_m, defaults.odometry.crossing_edge_tolerance_m);
+  EXPECT_EQ(config.lidar.calibration_updates, defaults.lidar.calibration_updates);
+  EXPECT_DOUBLE_EQ(config.imu.gyro_range_rad_s, defaults.imu.gyro_range_rad_s);
+  EXPECT_DOUBLE_EQ(config.imu.accel_range_m_s2, defaults.imu.accel_range_m_s2);
+}
+
+TEST(ConfigLoader, InputHardeningKeys) {
+  const auto c = liod::load_config_from_string(
+      "lidar:\n  calibration_updates: follow\nimu:\n  gyro_range_rad_s: 8.7\n  accel_range_m_s2: 156.9\n", "t");
+  EXPECT_EQ(c.lidar.calibration_updates, liod::CalibrationUpdates::kFollow);
+  EXPECT_DOUBLE_EQ(c.imu.gyro_range_rad_s, 8.7);
+  EXPECT_DOUBLE_EQ(c.imu.accel_range_m_s2, 156.9);
+  EXPECT_EQ(liod::Config{}.lidar.calibration_updates, liod::CalibrationUpdates::kPin);
+  // 2000 deg/s and 10 g (Xsens MTi-630), a little above so that a clipped reading is at, not beyond.
+  EXPECT_GE(liod::Config{}.imu.gyro_range_rad_s, 2000.0 * M_PI / 180.0);
+  EXPECT_GE(liod::Config{}.imu.accel_range_m_s2, 10.0 * 9.80665);
+  EXPECT_NE(error_of("lidar:\n  calibration_updates: sometimes\n").find("follow"), std::string::npos);
+  // The CAN table profile must map every axis: one it never receives would read 0 as if measured.
+  const auto msg = error_of("drivers:\n  imu:\n    transport: can\n    can_profile: table\n    can_signals:\n"
+                            "      - {quantity: gyro_x, id: 1}\n");
+  EXPECT_NE(msg.find("gyro_y has none"), std::string::npos) << msg;
 }
 
 // The advanced keys' example lists every one of them at its default.

@@ -9,6 +9,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <thread>
 
@@ -299,4 +300,164 @@ TEST(CanImu, ThroughVcanWhereAllowed) {
   stop = true;
   t.join();
   EXPECT_TRUE(got) << out.samples();
+}
+
+// The StatusWord (XDI 0xE020) carries the sensor's own clipping flags, per axis: bits 8-10 the
+// accelerometer's x, y, z, bits 11-13 the gyroscope's (Xsens xsstatusflag.h).
+TEST(MtData2, StatusWordClippingFlagsPerAxis) {
+  std::vector<xsens::MtData2Sample> got;
+  xsens::MtData2Parser parser([&](const xsens::MtData2Sample& m) { got.push_back(m); });
+  parser.feed(xsens::build_mtdata2(1, 100, gyro_of(1), accel_of(1), 0x00000103U));  // acc x + self test + filter ok
+  parser.feed(xsens::build_mtdata2(2, 125, gyro_of(2), accel_of(2), 1U << 13));      // gyro z
+  parser.feed(xsens::build_mtdata2(3, 150, gyro_of(3), accel_of(3), 1U << 14));      // magnetometer x only
+  parser.feed(frame(4));                                                             // no StatusWord
+  ASSERT_EQ(got.size(), 4U);
+  ASSERT_TRUE(got[0].status_word.has_value());
+  EXPECT_TRUE(xsens::accel_clipped(*got[0].status_word, 0));
+  EXPECT_FALSE(xsens::accel_clipped(*got[0].status_word, 1));
+  EXPECT_FALSE(xsens::gyro_clipped(*got[0].status_word, 0));
+  EXPECT_TRUE(xsens::inertial_clipped(*got[0].status_word));
+  ASSERT_TRUE(got[1].status_word.has_value());
+  EXPECT_TRUE(xsens::gyro_clipped(*got[1].status_word, 2));
+  EXPECT_FALSE(xsens::gyro_clipped(*got[1].status_word, 1));
+  EXPECT_TRUE(xsens::inertial_clipped(*got[1].status_word));
+  EXPECT_FALSE(xsens::inertial_clipped(*got[2].status_word));
+  EXPECT_FALSE(got[3].status_word.has_value());
+  EXPECT_TRUE(got[1].rate_of_turn->isApprox(gyro_of(2), 1e-6));  // the other items still read
+}
+
+namespace {
+
+/// A pseudo-terminal in raw mode playing a serial IMU: `path` to open, `master` to write to.
+struct Pty {
+  int master = -1;
+  int slave = -1;
+  std::string path;
+  Pty() {
+    master = ::posix_openpt(O_RDWR | O_NOCTTY);
+    if (master < 0 || ::grantpt(master) != 0 || ::unlockpt(master) != 0) return;
+    path = ::ptsname(master);
+    slave = ::open(path.c_str(), O_RDWR | O_NOCTTY);
+    termios raw{};
+    if (slave < 0 || ::tcgetattr(slave, &raw) != 0) return;
+    ::cfmakeraw(&raw);
+    ::tcsetattr(slave, TCSANOW, &raw);
+  }
+  ~Pty() {
+    if (slave >= 0) ::close(slave);
+    if (master >= 0) ::close(master);
+  }
+  Pty(const Pty&) = delete;
+  Pty& operator=(const Pty&) = delete;
+};
+
+}  // namespace
+
+// Through the serial transport: a sample whose StatusWord reports a clip reaches the ring flagged
+// saturated; one beyond the configured range is dropped, counted (a corrupt value the checksum let by).
+TEST(SerialImu, ClippedSamplesAreFlaggedAndImpossibleOnesDropped) {
+  Pty pty;
+  ASSERT_GE(pty.slave, 0);
+  Config config;
+  config.drivers.imu.serial_device = pty.path;
+  SpscRing<ImuItem> ring(64);
+  std::atomic<bool> stop{false};
+  ImuOutput out(ring, false, stop, 0);
+  out.range = {config.imu.gyro_range_rad_s, config.imu.accel_range_m_s2};
+  SerialImuSource source(config);
+  std::thread t([&] { source.run(out, stop); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  const Eigen::Vector3d beyond(0.0, 0.0, 5000.0);  // m/s^2: 500 g, beyond any MEMS accelerometer
+  // At the sensor's pace (2.5 ms), so that the host stamps keep the samples apart.
+  for (int i = 0; i < 6; ++i) {
+    const auto f = i == 4 ? xsens::build_mtdata2(4, 1100, gyro_of(4), beyond)
+                          : xsens::build_mtdata2(static_cast<std::uint16_t>(i), static_cast<std::uint32_t>(1000 + 25 * i),
+                                                 gyro_of(i), accel_of(i), i == 2 ? 1U << 9 : 0U);
+    ASSERT_EQ(::write(pty.master, f.data(), f.size()), static_cast<ssize_t>(f.size()));
+    std::this_thread::sleep_for(std::chrono::microseconds(2500));
+  }
+  ASSERT_TRUE(test::wait_for([&] { return out.samples() >= 5; }, std::chrono::milliseconds(5000))) << out.samples();
+  stop = true;
+  t.join();
+  std::vector<std::uint8_t> flags;
+  ImuItem it;
+  while (ring.try_pop(it)) flags.push_back(it.sample.flags);
+  EXPECT_EQ(flags, (std::vector<std::uint8_t>{0, 0, ImuSample::kSaturated, 0, 0}));
+  EXPECT_EQ(out.saturated(), 1U);
+  EXPECT_EQ(out.out_of_range(), 1U);
+}
+
+// The gate on every transport's samples: at the range (to 0.1 %) is a clip, beyond it or not
+// finite no measurement.
+TEST(ImuGate, AtTheRangeIsSaturatedBeyondItDropped) {
+  SpscRing<ImuItem> ring(64);
+  std::atomic<bool> stop{false};
+  ImuOutput out(ring, false, stop, 0);
+  const Config defaults;
+  out.range = {defaults.imu.gyro_range_rad_s, defaults.imu.accel_range_m_s2};
+  const double g2000 = 2000.0 * M_PI / 180.0;  // a clipped MTi-630 gyro axis
+  const double g10 = 10.0 * 9.80665;            // a clipped MTi-630 accelerometer axis
+  auto sample = [](double t, Eigen::Vector3d w, Eigen::Vector3d a) {
+    ImuSample s;
+    s.time = t;
+    s.gyro = w;
+    s.accel = a;
+    return s;
+  };
+  out.sample(sample(1.000, {0.1, 0.2, 0.3}, {0.0, 0.0, 9.8}));
+  out.sample(sample(1.005, {0.1, -g2000, 0.3}, {0.0, 0.0, 9.8}));
+  out.sample(sample(1.010, {0.1, 0.2, 0.3}, {0.0, 0.0, g10}));
+  out.sample(sample(1.015, {0.1, 0.2, 40.0}, {0.0, 0.0, 9.8}));          // 2292 deg/s
+  out.sample(sample(1.020, {0.1, 0.2, 0.3}, {-120.0, 0.0, 9.8}));        // 12.2 g
+  out.sample(sample(1.025, {0.1, std::nan(""), 0.3}, {0.0, 0.0, 9.8}));
+  ImuSample flagged = sample(1.030, {0.1, 0.2, 0.3}, {0.0, 0.0, 9.8});
+  flagged.flags = ImuSample::kSaturated;  // the sensor said so
+  out.sample(flagged);
+  std::vector<std::pair<double, std::uint8_t>> got;
+  ImuItem it;
+  while (ring.try_pop(it)) got.emplace_back(it.sample.time, it.sample.flags);
+  const std::vector<std::pair<double, std::uint8_t>> expected = {
+      {1.000, 0}, {1.005, ImuSample::kSaturated}, {1.010, ImuSample::kSaturated}, {1.030, ImuSample::kSaturated}};
+  EXPECT_EQ(got, expected);
+  EXPECT_EQ(out.saturated(), 3U);
+  EXPECT_EQ(out.out_of_range(), 3U);
+}
+
+// The table profile emitted a sample whenever gyro_x came, with whatever the other quantities held:
+// an axis whose frames stopped kept its last value, one never received read 0 (free fall, for an
+// accelerometer). Each must be no older than max_pair_age_s.
+TEST(CanImu, TableProfileNeedsEveryAxisFresh) {
+  std::vector<CanSignalConfig> table;
+  for (const char* q : {"gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"}) {
+    CanSignalConfig c;
+    c.quantity = q;
+    const bool gyro = q[0] == 'g';
+    c.can_id = gyro ? 0x100 : 0x101;
+    c.byte_offset = 2 * (q[std::strlen(q) - 1] - 'x');
+    c.is_signed = true;
+    c.scale = gyro ? 1e-3 : 1e-2;
+    table.push_back(c);
+  }
+  const double age = 1.5 / 200.0;  // as the daemon sets it at 200 Hz
+  CanImuDecoder dec(CanProfile::kTable, -1, table, age);
+  auto frame_at = [](std::uint32_t id, std::int64_t t_ns) {
+    CanFrame f;
+    f.id = id;
+    f.dlc = 6;
+    f.data = {0x10, 0x00, 0x20, 0x00, 0xD4, 0x03, 0, 0};  // 16, 32, 980 raw
+    f.time_ns = t_ns;
+    return f;
+  };
+  constexpr std::int64_t kMs = 1'000'000;
+  EXPECT_FALSE(dec.feed(frame_at(0x100, 0)).has_value());        // no acceleration ever received
+  EXPECT_FALSE(dec.feed(frame_at(0x101, 1 * kMs)).has_value());  // acceleration: completes nothing
+  const auto s = dec.feed(frame_at(0x100, 5 * kMs));               // both 4 ms apart: a sample
+  ASSERT_TRUE(s.has_value());
+  EXPECT_NEAR(s->accel.z(), 9.80, 1e-9);
+  EXPECT_FALSE(dec.feed(frame_at(0x100, 10 * kMs)).has_value());   // acceleration 9 ms old: stale
+  EXPECT_FALSE(dec.feed(frame_at(0x100, 15 * kMs)).has_value());
+  EXPECT_EQ(dec.stats().stale_axes, 3U);
+  EXPECT_EQ(dec.stats().samples, 1U);
+  EXPECT_FALSE(dec.feed(frame_at(0x101, 19 * kMs)).has_value());
+  EXPECT_TRUE(dec.feed(frame_at(0x100, 20 * kMs)).has_value());    // fresh again
 }

@@ -390,7 +390,7 @@ TEST(Record, RecordingReplaysToTheSourcePoses) {
 // exits non-zero, because a file it was asked for is incomplete.
 TEST(Record, AFullDiskStopsOnlyTheRecording) {
   LIOD_REQUIRE_SIM_DRIVE(drive);
-  if (!std::filesystem::exists(test::binary_dir() / "bin" / "liod")) GTEST_SKIP() << "liod binary not built";
+  LIOD_REQUIRE_PROGRAM("liod");
   const std::size_t ref_scans = read_tum(reference_replay(*drive) / "scan.tum").size();
   const test::ScratchDir rec("recording-full");
   constexpr rlim_t kLimit = 256 * 1024;

@@ -45,6 +45,23 @@ TEST(Pps, EdgeCorrection) {
   EXPECT_EQ(pps_edge_correction(5500000000LL), std::numeric_limits<std::int64_t>::min());
 }
 
+// Found by fuzz_time_sync: the readings come from outside (a capture file's times, a header),
+// and host minus sensor, or edge plus half a second, overflowed int64.
+TEST(OffsetTracker, ReadingsFromAnywhereInTheRangeKeepTheirSign) {
+  OffsetTracker t(2'000'000'000, 100'000'000);
+  constexpr std::int64_t kMin = std::numeric_limits<std::int64_t>::min();
+  // A capture time near the start of the range against a header of the year 2096: the host is
+  // behind by more than int64 holds; the offset reads as far behind as it can, not far ahead.
+  EXPECT_EQ(t.add(kMin + 1000, 4'000'000'000'000'000'000LL), kMin);
+  EXPECT_LT(t.offset_ns(), 0);
+}
+
+TEST(Pps, EdgeCorrectionAtTheEndOfTheRange) {
+  constexpr std::int64_t kMax = std::numeric_limits<std::int64_t>::max();  // ...036 854 775 807 ns
+  EXPECT_EQ(pps_edge_correction(kMax), 1'000'000'000 - 854'775'807);
+  EXPECT_EQ(pps_edge_correction(-5'000'000'000LL - 1200), 1200);
+}
+
 TEST(Pps, MissingChipIsAnErrorNotACrash) {
   EXPECT_THROW(PpsDiscipline("gpiochip-does-not-exist", 0), std::runtime_error);
 }

@@ -8,6 +8,7 @@
 #include "liod/config.hpp"
 #include "liod/daemon/pipeline.hpp"
 #include "liod/daemon/sources.hpp"
+#include "liod/drivers/byte_order.hpp"
 #include "liod/drivers/pcap_reader.hpp"
 #include "liod/drivers/rs_helios.hpp"
 #include "liod/drivers/udp_receiver.hpp"
@@ -36,25 +37,29 @@ Config helios16p_config(std::uint16_t msop, std::uint16_t difop) {
   return c;
 }
 
+/// The sweeps of the capture decoded from the file with the same settings: the reference.
+std::vector<SweepSummary> file_sweeps(const Config& config, const std::filesystem::path& pcap) {
+  std::vector<SweepSummary> expected;
+  drivers::SpscRing<ScanItem> ring(64);
+  std::atomic<bool> stop{false};
+  LidarOutput out(config, ring, true, false, stop);
+  drivers::PcapReader reader(pcap);
+  drivers::UdpDatagram d;
+  while (reader.next(d)) out.packet(d.payload, d.capture_time_ns, d.dst_port);
+  out.finish();
+  ScanItem s;
+  while (ring.try_pop(s)) expected.push_back({s.scan.start_time, s.scan.end_time, s.scan.points.size()});
+  return expected;
+}
+
+const std::filesystem::path kHelios16pPcap = test::shared_dir() / "data/robosense/helios16p_5rev.pcap";
+
 void udp_same_sweeps(double pace) {
-  const auto pcap = test::shared_dir() / "data/robosense/helios16p_5rev.pcap";
+  const auto& pcap = kHelios16pPcap;
   LIOD_REQUIRE_SHARED(pcap);
   const auto port = static_cast<std::uint16_t>(40000 + (::getpid() % 5000) * 4 + (pace > 1 ? 2 : 0));
   const Config config = helios16p_config(port, static_cast<std::uint16_t>(port + 1));
-
-  // Reference: the file through the same decoder settings.
-  std::vector<SweepSummary> expected;
-  {
-    drivers::SpscRing<ScanItem> ring(64);
-    std::atomic<bool> stop{false};
-    LidarOutput out(config, ring, true, false, stop);
-    drivers::PcapReader reader(pcap);
-    drivers::UdpDatagram d;
-    while (reader.next(d)) out.packet(d.payload, d.capture_time_ns, d.dst_port);
-    out.finish();
-    ScanItem s;
-    while (ring.try_pop(s)) expected.push_back({s.scan.start_time, s.scan.end_time, s.scan.points.size()});
-  }
+  const std::vector<SweepSummary> expected = file_sweeps(config, pcap);
   ASSERT_GE(expected.size(), 4U);
 
   drivers::SpscRing<ScanItem> ring(64);
@@ -82,6 +87,79 @@ void udp_same_sweeps(double pace) {
 
 TEST(UdpLidar, RealHeliosRecordedPaceNoLossSameSweeps) { udp_same_sweeps(1.0); }
 TEST(UdpLidar, RealHeliosFiveTimesPaceNoLossSameSweeps) { udp_same_sweeps(5.0); }
+
+namespace {
+
+/// Sends each payload from `source` (a loopback address other than 127.0.0.1 is a second host) to
+/// 127.0.0.1:`port`, `interval` apart. Returns how many were sent.
+std::size_t send_from(const char* source, std::uint16_t port, const std::vector<std::vector<std::uint8_t>>& payloads,
+                      std::chrono::microseconds interval) {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  sockaddr_in from{};
+  from.sin_family = AF_INET;
+  from.sin_addr.s_addr = htonl(drivers::parse_ipv4(source));
+  if (fd < 0 || ::bind(fd, reinterpret_cast<const sockaddr*>(&from), sizeof from) != 0) return 0;
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(port);
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  std::size_t sent = 0;
+  for (const auto& p : payloads) {
+    if (::sendto(fd, p.data(), p.size(), 0, reinterpret_cast<const sockaddr*>(&to), sizeof to) ==
+        static_cast<ssize_t>(p.size()))
+      ++sent;
+    std::this_thread::sleep_for(interval);
+  }
+  ::close(fd);
+  return sent;
+}
+
+}  // namespace
+
+TEST(UdpLidar, ASecondSenderOnTheLidarPortIsDroppedAndCounted) {
+  const auto& pcap = kHelios16pPcap;
+  LIOD_REQUIRE_SHARED(pcap);
+  const auto port = static_cast<std::uint16_t>(30000 + (::getpid() % 5000) * 2);
+  const Config config = helios16p_config(port, static_cast<std::uint16_t>(port + 1));  // no source_address
+  const std::vector<SweepSummary> expected = file_sweeps(config, pcap);
+  ASSERT_GE(expected.size(), 4U);
+  // The second host replays the capture's MSOP packets with every block at 100.00 deg.
+  std::vector<std::vector<std::uint8_t>> foreign;
+  {
+    drivers::PcapReader reader(pcap);
+    drivers::UdpDatagram d;
+    while (reader.next(d) && foreign.size() < 300) {
+      if (d.dst_port != 6699) continue;
+      foreign.emplace_back(d.payload.begin(), d.payload.end());
+      for (std::size_t b = 0; b < 12; ++b) drivers::store_be16(foreign.back().data() + 42 + 100 * b + 2, 10000);
+    }
+  }
+
+  drivers::SpscRing<ScanItem> ring(64);
+  std::atomic<bool> stop{false};
+  LidarOutput out(config, ring, false, true, stop);  // live, as liod run
+  UdpLidarSource source(config);
+  std::thread driver([&] { source.run(out, stop); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // sockets bound
+  std::size_t sent = 0;
+  std::thread lidar([&] {
+    sent = test::send_pcap_loopback(pcap.string(), {{6699, port}, {7788, static_cast<std::uint16_t>(port + 1)}}, 1.0);
+  });
+  ASSERT_TRUE(test::wait_for([&] { return out.packets() >= 1; }, std::chrono::milliseconds(2000)));
+  const std::size_t foreign_sent = send_from("127.0.0.2", port, foreign, std::chrono::microseconds(1000));
+  lidar.join();
+  ASSERT_TRUE(test::wait_for([&] { return out.packets() >= sent; }, std::chrono::milliseconds(5000)));
+  stop = true;
+  driver.join();
+  out.finish();
+  std::vector<SweepSummary> got;
+  ScanItem s;
+  while (ring.try_pop(s)) got.push_back({s.scan.start_time, s.scan.end_time, s.scan.points.size()});
+  EXPECT_EQ(foreign_sent, 300U);
+  EXPECT_EQ(out.packets(), sent);  // the LiDAR's datagrams only
+  EXPECT_EQ(out.transport.refused.load(), foreign_sent);
+  EXPECT_EQ(got, expected);
+}
 
 TEST(UdpLidar, SourceAddressFilterDropsOtherSenders) {
   drivers::UdpReceiverOptions o;

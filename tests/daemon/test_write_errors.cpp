@@ -60,7 +60,7 @@ TEST(WriteErrors, ReplayScanLogToAFullDisk) {
 TEST(WriteErrors, LiodReplayCommandExitsNonZero) {
   LIOD_REQUIRE_SIM_DRIVE(drive);
   const auto bin = binary_dir() / "bin" / "liod";
-  if (!std::filesystem::exists(bin)) GTEST_SKIP() << "liod binary not built";
+  LIOD_REQUIRE_PROGRAM("liod");
   const ScratchDir dir("write-errors-cli");
   const std::string cmd = bin.string() + " replay --config " + LIOD_SOURCE_DIR + "/config/liod.yaml --config " +
                           (*drive / "extrinsics.yaml").string() + " --pcap " + (*drive / "lidar.pcap").string() +

@@ -192,14 +192,21 @@ TEST(RsHeliosSynthetic, DifopReturnModeOverridesDetection) {
   o.angles = table_5515();
   RsHeliosDecoder dec(o, [](Scan&, const SweepInfo&) {});
   const auto single = test::make_msop(1'700'000'000'000'000LL, 1, varied_blocks(1000, false));
-  dec.feed(single);
-  EXPECT_FALSE(dec.dual_return());
+  const auto dual = test::make_msop(1'700'000'000'001'000LL, 2, varied_blocks(1000, true));
   ASSERT_EQ(dec.feed(test::make_difop(kVert, kHoriz, helios::kReturnDual)), PacketKind::Difop);
   dec.feed(single);
   EXPECT_TRUE(dec.dual_return());
+  // A later DIFOP's return mode is a calibration change: pinned by default (counted, not taken).
   dec.feed(test::make_difop(kVert, kHoriz, helios::kReturnLast));
-  dec.feed(test::make_msop(1'700'000'000'001'000LL, 2, varied_blocks(1000, true)));
-  EXPECT_FALSE(dec.dual_return());
+  dec.feed(dual);
+  EXPECT_TRUE(dec.dual_return());
+  EXPECT_EQ(dec.stats().calibration_changes, 1U);
+
+  RsHeliosDecoder detecting(o, [](Scan&, const SweepInfo&) {});  // no DIFOP: detected per packet
+  detecting.feed(single);
+  EXPECT_FALSE(detecting.dual_return());
+  detecting.feed(dual);
+  EXPECT_TRUE(detecting.dual_return());
 }
 
 TEST(RsHeliosSynthetic, Helios16PDualPutsTheSecondReturnInSlots16To31) {
@@ -403,7 +410,8 @@ TEST(RsHeliosSynthetic, DifopAngleTableRejectionRules) {
     EXPECT_NE(std::string(d.angles_rejected_reason), "") << c.name;
     EXPECT_EQ(d.motor_rpm, 600) << c.name;  // the rest of the packet still parses
   }
-  // A rejected DIFOP table leaves the CSV table in use; a valid one replaces it.
+  // A rejected DIFOP table leaves the CSV table in use; the first valid one replaces it, from the
+  // next sweep on (no sweep is decoded with two tables), and is no change of calibration.
   HeliosOptions o;
   o.angles = table_5515();
   o.emit_partial_sweep_on_flush = true;
@@ -414,17 +422,22 @@ TEST(RsHeliosSynthetic, DifopAngleTableRejectionRules) {
   dec.feed(unprogrammed);
   EXPECT_EQ(dec.stats().difop_angles_rejected, 1U);
   std::array<SyntheticBlock, 12> blocks{};
-  for (std::size_t k = 0; k < 12; ++k) blocks[k].azimuth = static_cast<std::uint16_t>(20 * k);
   blocks[0].raw_distance[0] = 4000;  // 10 m on slot 0: 14.94° from the CSV
-  dec.feed(test::make_msop(1'000'000, 1, blocks));
+  auto packet_from = [&](std::uint16_t azimuth, std::uint32_t counter) {
+    for (std::size_t k = 0; k < 12; ++k) blocks[k].azimuth = static_cast<std::uint16_t>(azimuth + 20 * k);
+    return test::make_msop(1'000'000 + 667 * counter, counter, blocks);
+  };
+  dec.feed(packet_from(35520, 0));
   dec.feed(test::make_difop(std::vector<double>(32, -5.0), std::vector<double>(32, 0.0), helios::kReturnStrongest));
-  for (std::size_t k = 0; k < 12; ++k) blocks[k].azimuth = static_cast<std::uint16_t>(240 + 20 * k);
-  dec.feed(test::make_msop(1'000'667, 2, blocks));  // the next packet, now with -5°
+  dec.feed(packet_from(35760, 1));  // the same sweep: still the CSV's
+  dec.feed(packet_from(0, 2));      // past the split: -5°
   dec.flush();
-  ASSERT_EQ(sweeps.size(), 1U);
+  ASSERT_EQ(sweeps.size(), 2U);
   ASSERT_EQ(sweeps[0].points.size(), 2U);
-  EXPECT_NEAR(sweeps[0].points[0].z, 10.0 * std::sin(14.94 * std::numbers::pi / 180.0), 1e-4);
-  EXPECT_NEAR(sweeps[0].points[1].z, 10.0 * std::sin(-5.0 * std::numbers::pi / 180.0), 1e-4);
+  ASSERT_EQ(sweeps[1].points.size(), 1U);
+  for (const LidarPoint& p : sweeps[0].points) EXPECT_NEAR(p.z, 10.0 * std::sin(14.94 * std::numbers::pi / 180.0), 1e-4);
+  EXPECT_NEAR(sweeps[1].points[0].z, 10.0 * std::sin(-5.0 * std::numbers::pi / 180.0), 1e-4);
+  EXPECT_EQ(dec.stats().calibration_changes, 0U);
 }
 
 TEST(RsHeliosSynthetic, AngleTableMustFitTheModel) {

@@ -1,6 +1,7 @@
 // Sweep splitting, time rebasing, loss accounting and buffer reuse, on synthetic packet streams.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -183,6 +184,97 @@ TEST(SweepAssembly, BuffersAreRecycledWhenTheConsumerSwaps) {
   // Two buffers ping-pong between the decoder and the consumer: no new allocation per sweep.
   const std::set<const LidarPoint*> distinct(buffers.begin() + 1, buffers.end());
   EXPECT_LE(distinct.size(), 2U);
+}
+
+/// Packets whose 12 blocks all read one azimuth (a stalled motor, a stuck azimuth field, a foreign
+/// sender), 12 blocks of 2 m returns each, timed as a 10 Hz single-return stream.
+std::vector<std::uint8_t> stuck_packet(std::size_t i, std::uint16_t azimuth) {
+  std::array<SyntheticBlock, 12> blocks{};
+  for (auto& b : blocks) {
+    b.azimuth = azimuth;
+    b.raw_distance.fill(800);
+    b.intensity.fill(9);
+  }
+  const auto t_us = static_cast<std::int64_t>(std::llround(1.7e15 + static_cast<double>(i) * 12 * kT * 1e6));
+  return test::make_msop(t_us, static_cast<std::uint32_t>(i), blocks);
+}
+
+TEST(SweepAssembly, AStuckAzimuthIsCutAtTheSizeCap) {
+  // 20 s of packets that never cross the split: without a cap the one open sweep held them all
+  // (11.5 million points here; `liod decode` of 30 s of such a drive reached 700 MB).
+  HeliosOptions o = options(0.0);
+  o.emit_partial_sweep_on_flush = true;
+  std::vector<SweepInfo> infos;
+  std::size_t most_points = 0;
+  std::size_t largest_capacity = 0;
+  RsHeliosDecoder dec(o, [&](Scan& s, const SweepInfo& info) {
+    infos.push_back(info);
+    most_points = std::max(most_points, s.points.size());
+    largest_capacity = std::max(largest_capacity, s.points.capacity());
+  });
+  constexpr std::size_t kPackets = 30000;
+  for (std::size_t i = 0; i < kPackets; ++i) dec.feed(stuck_packet(i, 10000));
+  dec.flush();
+  // The cap: a quarter above one revolution at 5 Hz in dual return (7200 blocks, spec §3, §7).
+  constexpr std::size_t kCapPoints = std::size_t{helios::kMaxSweepBlocks} * 32;
+  EXPECT_EQ(kCapPoints, 288000U);
+  ASSERT_EQ(infos.size(), kPackets * 12 / helios::kMaxSweepBlocks);  // 40, the last one flushed
+  for (std::size_t k = 0; k < infos.size(); ++k) {
+    EXPECT_TRUE(infos[k].truncated) << k;
+    EXPECT_EQ(infos[k].blocks, helios::kMaxSweepBlocks) << k;
+  }
+  EXPECT_EQ(dec.stats().truncated_sweeps, infos.size());
+  EXPECT_LE(most_points, kCapPoints);
+  // The working buffer grows by doubling from its reserve, so it never holds more than twice the cap.
+  EXPECT_LE(largest_capacity, 2 * kCapPoints);
+}
+
+TEST(SweepAssembly, AfterAStuckRunTheFirstSweepFromTheSplitIsWhole) {
+  // 1.5 revolutions stuck at 100 deg, then the motor turns again from 100 deg: the sweep begun at
+  // the last cut holds the rest of the stuck run and is truncated too; the one from 0 deg is whole.
+  std::vector<SweepInfo> infos;
+  RsHeliosDecoder dec(options(0.0), [&](Scan&, const SweepInfo& info) { infos.push_back(info); });
+  std::size_t i = 0;
+  for (; i < 1000; ++i) dec.feed(stuck_packet(i, 10000));
+  const Stream turning(10000);
+  for (std::size_t k = 0; k < 150 * 3; ++k, ++i) {
+    auto p = turning.packet(k);
+    const auto t_us = static_cast<std::int64_t>(std::llround(1.7e15 + static_cast<double>(i) * 12 * kT * 1e6));
+    store_be48(p.data() + 20, static_cast<std::uint64_t>(t_us / 1'000'000));
+    store_be32(p.data() + 26, static_cast<std::uint32_t>(t_us % 1'000'000));
+    dec.feed(p);
+  }
+  ASSERT_EQ(infos.size(), 4U);  // cut at 9000 blocks, the rest to 0 deg, then two revolutions
+  EXPECT_TRUE(infos[0].truncated);
+  EXPECT_TRUE(infos[1].truncated);
+  EXPECT_EQ(infos[1].blocks, 1000U * 12 - helios::kMaxSweepBlocks + 1300U);
+  EXPECT_FALSE(infos[2].truncated);
+  EXPECT_EQ(infos[2].blocks, 1800U);
+  EXPECT_FALSE(infos[3].truncated);
+  EXPECT_EQ(dec.stats().truncated_sweeps, 2U);
+}
+
+TEST(SweepAssembly, ARevolutionAtTheSlowestRateInDualReturnIsNotCut) {
+  // 5 Hz (0.1° per block period), dual return: 7200 blocks per revolution, pairs share an azimuth.
+  HeliosOptions o = options(0.0);
+  o.return_mode = ReturnModePolicy::ForceDual;
+  std::vector<SweepInfo> infos;
+  RsHeliosDecoder dec(o, [&](Scan&, const SweepInfo& info) { infos.push_back(info); });
+  for (std::size_t i = 0; i < 600 * 3 + 1; ++i) {
+    std::array<SyntheticBlock, 12> blocks{};
+    for (std::size_t k = 0; k < 12; ++k) {
+      blocks[k].azimuth = static_cast<std::uint16_t>((10 * (6 * i + k / 2)) % 36000);
+      blocks[k].raw_distance.fill(800);
+    }
+    const auto t_us = static_cast<std::int64_t>(std::llround(1.7e15 + static_cast<double>(i) * 6 * kT * 1e6));
+    dec.feed(test::make_msop(t_us, static_cast<std::uint32_t>(i), blocks));
+  }
+  ASSERT_EQ(infos.size(), 3U);
+  for (const SweepInfo& info : infos) {
+    EXPECT_FALSE(info.truncated);
+    EXPECT_EQ(info.blocks, 7200U);
+  }
+  EXPECT_EQ(dec.stats().truncated_sweeps, 0U);
 }
 
 TEST(SweepAssembly, ArrivalTimeStampsReplaceTheSensorClock) {

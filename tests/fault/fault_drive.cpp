@@ -90,6 +90,10 @@ const FaultDrive* crest_start_drive() {
   return simulated_drive("crest-start-drive", "--route highway --seed 7 --duration 60 --max-speed 15");
 }
 
+const FaultDrive* reboot_drive() {
+  return simulated_drive("reboot-drive", "--route urban --seed 1 --duration 60 --max-speed 12");
+}
+
 const FaultDrive* tunnel_yaw_bias_drive() {
   return simulated_drive("tunnel-yaw-bias-drive", "--route tunnel --seed 7 --duration 40 --max-speed 15");
 }

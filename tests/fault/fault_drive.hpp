@@ -85,6 +85,10 @@ const FaultDrive* crest_start_drive();
 /// tunnel whose moving off turned the heading.
 const FaultDrive* tunnel_yaw_bias_drive();
 
+/// `liod-sim --route urban --seed 1 --duration 60 --max-speed 12`: the fault drive's route, long
+/// enough for a LiDAR that reboots (30 s) and comes back.
+const FaultDrive* reboot_drive();
+
 }  // namespace liod::test
 
 // The drive as `var`: skips without liod-sim or ../shared (fails under CI, see test_env.hpp), fails

@@ -54,6 +54,9 @@ FaultRun run_with_faults(const FaultDrive& drive, const std::vector<std::string>
   run.error = pipeline.error();
   run.totals = pipeline.totals();
   run.lidar = pipeline.lidar_output().decoder_stats();
+  run.lidar_refused = pipeline.lidar_output().transport.refused.load();
+  run.imu_saturated = pipeline.imu_output().saturated();
+  run.imu_out_of_range = pipeline.imu_output().out_of_range();
   return run;
 }
 

@@ -17,6 +17,9 @@ struct FaultRun {
   std::vector<pose::PoseMessage> poses;    ///< scan- and IMU-rate poses, in publish order
   OdometryTotals totals;
   drivers::HeliosStats lidar;
+  std::uint64_t lidar_refused = 0;         ///< datagrams from a sender other than the LiDAR
+  std::uint64_t imu_saturated = 0;         ///< IMU samples at the range (flagged), and beyond it (dropped)
+  std::uint64_t imu_out_of_range = 0;
   bool finished = false;                   ///< every thread ended by itself within the time limit
   std::string error;                       ///< the first error a pipeline thread died with
 

@@ -497,3 +497,148 @@ TEST(FaultInjection, StartWhileMovingOverACrestTakesNoPitchRateForTheGyroBias) {
   const auto run = run_with_faults(*drive, {});
   common_checks(*drive, run, "start over a crest at 15 m/s", 0.0, 1.0);
 }
+
+// ---- faults a vehicle meets on the road ----------------------------------------------------------
+
+namespace {
+
+/// Scan poses in [from, to) (seconds after the origin) carrying `flag` are never `ok`, and `flag`
+/// is on at least `at_least` of them; prints the count.
+void expect_flagged_not_ok(const FaultDrive& drive, const FaultRun& run, std::uint32_t flag, const std::string& what,
+                           double from, double to, std::size_t at_least) {
+  const auto flagged = count_flag(run.poses, kScan, flag, drive.at(from), drive.at(to));
+  print_flags("scan poses flagged " + what + " in " + seconds(from) + "-" + seconds(to) + " s", flagged);
+  EXPECT_GE(flagged.flagged, at_least) << what;
+  for (const auto& p : run.poses) {
+    if ((p.flags & flag) != 0) {
+      EXPECT_EQ(p.flags & pose::kOk, 0U) << what << " and ok at t = " << std::fixed << p.time;
+    }
+  }
+}
+
+/// The largest sweep the decoder handed out: one revolution at the slowest rate in dual return
+/// with a quarter's margin (drivers::helios::kMaxSweepBlocks blocks of 32 slots) at most.
+void expect_sweeps_bounded(const FaultRun& run) {
+  std::cout << "          largest sweep " << run.lidar.largest_sweep_points << " points, "
+            << run.lidar.truncated_sweeps << " cut at the size cap" << std::endl;
+  EXPECT_LE(run.lidar.largest_sweep_points, std::size_t{drivers::helios::kMaxSweepBlocks} * 32);
+}
+
+}  // namespace
+
+TEST(FaultInjection, StuckAzimuthForThreeSeconds) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  // A stalled motor: every block reads 100 deg, the split is never crossed. The sweeps are cut at
+  // the size cap (9000 blocks, 0.5 s here), counted, and not registered: the odometry carries on
+  // with the IMU as through a LiDAR stop, and the first scan after says what happened. Before the
+  // cap the one open sweep held all of it (`liod decode` of 30 s of such packets: 700 MB).
+  const auto run = run_with_faults(*drive, {"stuck-azimuth:from=10,to=13"});
+  const auto o = common_checks(*drive, run, "azimuth stuck at 100 deg for 3 s", 13.2);
+  EXPECT_LE(o.after.rmse_m, kMaxAteM);
+  EXPECT_GE(run.lidar.truncated_sweeps, 6U);
+  expect_sweeps_bounded(run);
+  EXPECT_EQ(count_flag(run.poses, kScan, 0, drive->at(10.1), drive->at(13.0)).poses, 0U);
+  expect_flagged_not_ok(*drive, run, pose::kSweepTruncated, "sweep_truncated", 13.0, 13.3, 1);
+  EXPECT_EQ(count_flag(run.poses, kScan, pose::kSweepTruncated, 0.0, drive->at(13.0)).flagged, 0U);
+  EXPECT_EQ(count_flag(run.poses, kScan, pose::kSweepTruncated, drive->at(13.3), 1e300).flagged, 0U);
+  // IMU-rate poses carry on, flagged lidar_lost from 0.5 s and paused from 1 s (as in a stop).
+  EXPECT_EQ(count_flag(run.poses, kImu, 0, drive->at(11.2), drive->at(13.0)).poses, 0U);
+  expect_ok_from(*drive, run, 13.3, "stuck azimuth");
+}
+
+TEST(FaultInjection, SecondSenderOnTheLidarPort) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  // Another host sends RS-Helios packets to the LiDAR's port for 3 s (azimuths turned 180 deg):
+  // refused as not the sender the decoder locked onto, counted; the scans are the clean drive's.
+  const auto run = run_with_faults(*drive, {"second-sender:from=10,to=13"});
+  const auto o = common_checks(*drive, run, "a second sender on the LiDAR port for 3 s", 0.0);
+  std::cout << "          datagrams refused: " << run.lidar_refused << std::endl;
+  EXPECT_GE(run.lidar_refused, 4000U);  // 3 s of MSOP at 1500 packets/s
+  EXPECT_GE(o.scan_poses, 240U);
+  EXPECT_LE(o.scan_poses, 250U);
+  expect_ok_from(*drive, run, 1.0, "second sender");
+}
+
+TEST(FaultInjection, DifopWithAnotherCalibrationMidDrive) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  // One DIFOP at 10 s says every beam is 0.5 deg higher (lidar.calibration_updates: pin): not taken,
+  // counted; the sweeps while the sensor's last word disagreed are flagged, not ok.
+  const auto run = run_with_faults(*drive, {"difop-change:at=10"});
+  const auto o = common_checks(*drive, run, "one DIFOP with every elevation 0.5 deg higher", 12.0);
+  EXPECT_LE(o.after.rmse_m, kMaxAteM);
+  EXPECT_EQ(run.lidar.calibration_changes, 1U);
+  expect_flagged_not_ok(*drive, run, pose::kCalibrationChanged, "calibration_changed", 10.0, 12.0, 1);
+  EXPECT_EQ(count_flag(run.poses, kScan, pose::kCalibrationChanged, 0.0, drive->at(10.0)).flagged, 0U);
+  EXPECT_EQ(count_flag(run.poses, kScan, pose::kCalibrationChanged, drive->at(12.0), 1e300).flagged, 0U);
+  expect_ok_from(*drive, run, 12.0, "DIFOP change");
+}
+
+TEST(FaultInjection, PotholeClipsTheAccelerometer) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  // A pothole at 10 s: a 60 ms vertical jolt peaking at 25 g, clipped at the accelerometer's 10 g.
+  const auto run = run_with_faults(*drive, {"pothole:at=10"});
+  const auto o = common_checks(*drive, run, "pothole: accelerometer clipped at 10 g", 10.1);
+  EXPECT_LE(o.after.rmse_m, kMaxAteM);
+  std::cout << "          IMU samples saturated " << run.imu_saturated << ", beyond the range " << run.imu_out_of_range
+            << std::endl;
+  EXPECT_GE(run.imu_saturated, 4U);
+  EXPECT_EQ(run.imu_out_of_range, 0U);
+  expect_flagged_not_ok(*drive, run, pose::kImuSaturated, "imu_saturated", 9.9, 10.3, 1);
+  EXPECT_EQ(count_flag(run.poses, kScan, pose::kImuSaturated, 0.0, drive->at(9.9)).flagged, 0U);
+  EXPECT_EQ(count_flag(run.poses, kScan, pose::kImuSaturated, drive->at(10.3), 1e300).flagged, 0U);
+  expect_ok_from(*drive, run, 10.3, "pothole");
+}
+
+namespace {
+
+/// What the input path guarantees through a LiDAR reboot at 10 s lasting `outage` s: nothing
+/// from the LiDAR meanwhile, the restarted counter counted, the restarted clock taken over (the
+/// scans are timed on the host clock, time.lidar_clock: auto) and flagged, the sweeps bounded.
+void expect_reboot_handled(const FaultDrive& drive, const FaultRun& run, double outage) {
+  const double back = 10.0 + outage;
+  EXPECT_TRUE(run.finished);
+  EXPECT_EQ(run.error, "");
+  EXPECT_GE(run.lidar.counter_resets, 1U);
+  EXPECT_EQ(count_flag(run.poses, kScan, 0, drive.at(10.1), drive.at(back)).poses, 0U);
+  EXPECT_EQ(count_flag(run.poses, kImu, 0, drive.at(11.05), drive.at(back)).poses, 0U);  // paused
+  const auto after = count_flag(run.poses, kScan, 0, drive.at(back), drive.end() + 1.0);
+  EXPECT_GE(static_cast<double>(after.poses), (drive.end() - drive.at(back)) * 10.0 - 3.0);  // every sweep back
+  const auto jump = count_flag(run.poses, kScan, pose::kClockJump, drive.at(back), drive.at(back + 1.0));
+  print_flags("scan poses flagged clock_jump in the first second back", jump);
+  EXPECT_GE(jump.flagged, 1U);
+  expect_sweeps_bounded(run);
+}
+
+}  // namespace
+
+TEST(FaultInjection, LidarRestartsAfterThreeSeconds) {
+  LIOD_REQUIRE_FAULT_DRIVE(drive);
+  // A short power dip: 3 s silent, then the counter from 0 and the clock from 2017, unsynchronised.
+  const auto run = run_with_faults(*drive, {"lidar-reboot:at=10,outage=3"});
+  const auto o = common_checks(*drive, run, "LiDAR restart: 3 s silent, counter and clock restarted", 13.0);
+  EXPECT_LE(o.after.rmse_m, kMaxAteM);
+  expect_reboot_handled(*drive, run, 3.0);
+  expect_ok_from(*drive, run, 14.5, "LiDAR restart");
+}
+
+TEST(FaultInjection, LidarRebootFor30SecondsIsCountedAndItsClockTakenOver) {
+  LIOD_REQUIRE_DRIVE(drive, reboot_drive);
+  // An RS-Helios takes about 30 s to boot: the input path's part (the pose: the test below).
+  const auto run = run_with_faults(*drive, {"lidar-reboot:at=10,outage=30"});
+  expect_reboot_handled(*drive, run, 30.0);
+}
+
+// Core must re-initialise after a LiDAR outage longer than its IMU prediction can bridge: 30 s of
+// IMU dead reckoning at 12 m/s leaves the pose metres off, and the first scan back registers
+// against the old map from there. Measured: an 18.7 m jump at the first scan back, ATE 32.5 m
+// (23.4 m from 1 s after), and 164 of the 180 scan poses from 42 s on flagged ok. What is needed:
+// past such an outage, the scans back start a new map from the dead-reckoned pose with its
+// covariance widened (the pose marked initializing, not ok, until the registration has converged),
+// instead of registering against the map left behind.
+TEST(FaultInjection, DISABLED_LidarRebootFor30SecondsKeepsThePose) {
+  LIOD_REQUIRE_DRIVE(drive, reboot_drive);
+  const auto run = run_with_faults(*drive, {"lidar-reboot:at=10,outage=30"});
+  const auto o = common_checks(*drive, run, "LiDAR reboot: 30 s silent, counter and clock restarted", 40.0);
+  EXPECT_LE(o.after.rmse_m, kMaxAteM);
+  expect_ok_from(*drive, run, 42.0, "LiDAR reboot");
+}

@@ -29,10 +29,10 @@ struct ImuConfig {
   double gravity_m_s2 = 9.80665;
   double max_gap_s = 0.05;              // a longer gap marks the IMU as lost
   /// The IMU's measurement ranges (datasheet): a sample beyond either is no measurement (a
-  /// corrupted but finite value passes an 8-bit checksum) and is dropped. Defaults: the widest
-  /// ranges of automotive MEMS units, 2000 deg/s and 16 g.
-  double gyro_range_rad_s = 34.9;
-  double accel_range_m_s2 = 157.0;
+  /// corrupted but finite value passes an 8-bit checksum) and is dropped; one at the range is the
+  /// sensor clipping and is flagged saturated. Defaults: the Xsens MTi-630's 2000 deg/s and 10 g.
+  double gyro_range_rad_s = 34.91;
+  double accel_range_m_s2 = 98.07;
 };
 
 struct ExtrinsicsConfig {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "liod/error_state.hpp"
+#include "liod/imu_range.hpp"
 #include "liod/imu_trajectory.hpp"
 #include "liod/types.hpp"
 
@@ -23,7 +24,7 @@ class ImuBuffer {
   /// Keeps at most history_s back from the newest sample; a sample whose angular rate or specific
   /// force exceeds the IMU's measurement range on any axis is no measurement.
   ImuBuffer(double history_s, double gyro_range_rad_s, double accel_range_m_s2)
-      : history_s_(history_s), gyro_range_(gyro_range_rad_s), accel_range_(accel_range_m_s2) {}
+      : history_s_(history_s), range_{gyro_range_rad_s, accel_range_m_s2} {}
 
   /// Adds a sample; drops (and counts) a non-finite one, one beyond the measurement range, and
   /// one not after the newest.
@@ -45,8 +46,7 @@ class ImuBuffer {
 
  private:
   double history_s_;
-  double gyro_range_;
-  double accel_range_;
+  ImuRange range_;
   std::deque<ImuSample> samples_;
   std::size_t dropped_ = 0;
 };

@@ -42,6 +42,10 @@ struct ImuSample {
   Eigen::Vector3d gyro = Eigen::Vector3d::Zero();
   /// Specific force (includes the reaction to gravity: +9.81 on z when level and at rest), m/s^2.
   Eigen::Vector3d accel = Eigen::Vector3d::Zero();
+  /// What the driver found about this sample (the bits below); 0 for a plain measurement.
+  std::uint8_t flags = 0;
+  /// An axis reached the sensor's measurement range: it clipped, and reads a bound, not the motion.
+  static constexpr std::uint8_t kSaturated = 1U << 0;
 };
 
 }  // namespace liod

@@ -83,6 +83,8 @@ class Keys {
   std::map<std::string, std::string> values_;
 };
 
+Fault parse_vehicle_fault(const std::string& kind, Keys& k);
+
 Fault parse_kind(const std::string& kind, Keys& k) {
   if (kind == "drop") return DropPackets{k.percent("percent", 10.0), k.window()};
   if (kind == "reorder") {
@@ -121,6 +123,39 @@ Fault parse_kind(const std::string& kind, Keys& k) {
     return f;
   }
   if (kind == "cut-start") return CutStart{k.required_number("at")};
+  return parse_vehicle_fault(kind, k);
+}
+
+/// The faults a vehicle meets on the road (vehicle_faults.cpp).
+Fault parse_vehicle_fault(const std::string& kind, Keys& k) {
+  if (kind == "lidar-reboot") {
+    LidarReboot f{k.required_number("at"), k.number("outage", 30.0)};
+    if (!(f.outage_s > 0.0)) k.fail("'outage' must be positive");
+    return f;
+  }
+  if (kind == "difop-change") {
+    DifopChange f{k.required_number("at"), static_cast<int>(k.number("count", 1)), k.number("vertical-deg", 0.5),
+                  static_cast<int>(k.number("rpm", 0))};
+    if (f.count < 1) k.fail("'count' must be at least 1");
+    if (f.rpm < 0 || f.rpm > 65535) k.fail("'rpm' must be in [0, 65535]");
+    return f;
+  }
+  if (kind == "pothole") {
+    Pothole f;
+    f.at_s = k.required_number("at");
+    f.peak_m_s2 = k.number("peak", f.peak_m_s2);
+    f.range_m_s2 = k.number("range", f.range_m_s2);
+    f.duration_s = k.number("duration", f.duration_s);
+    if (!(f.peak_m_s2 > 0.0 && f.range_m_s2 > 0.0 && f.duration_s > 0.0 && f.duration_s <= 1.0))
+      k.fail("'peak' and 'range' must be positive, 'duration' in (0, 1] s");
+    return f;
+  }
+  if (kind == "stuck-azimuth") {
+    StuckAzimuth f{k.bounded_window(), k.number("azimuth", 100.0)};
+    if (!(f.azimuth_deg >= 0.0 && f.azimuth_deg < 360.0)) k.fail("'azimuth' must be in [0, 360)");
+    return f;
+  }
+  if (kind == "second-sender") return SecondSender{k.bounded_window(), k.number("shift-deg", 180.0)};
   throw std::invalid_argument("unknown fault '" + kind + "' (known: " + fault_syntax() + ")");
 }
 
@@ -139,7 +174,9 @@ std::string fault_syntax() {
   return "drop:percent=P[,from=S,to=S]; reorder:percent=P[,max-shift=N,from=S,to=S]; "
          "duplicate:percent=P[,from=S,to=S]; lidar-stop:from=S,to=S; imu-cut:from=S,to=S; rock:from=S,to=S[,rate=R]; "
          "clock-jump:sensor=lidar|imu,at=S,by=S; corrupt:mode=zero|max|garbage[,percent=P,from=S,to=S]; "
-         "ground-only:from=S,to=S[,max-z=M,max-range=M]; cut-start:at=S";
+         "ground-only:from=S,to=S[,max-z=M,max-range=M]; cut-start:at=S; lidar-reboot:at=S[,outage=S]; "
+         "difop-change:at=S[,count=N,vertical-deg=D,rpm=R]; pothole:at=S[,peak=A,range=A,duration=S]; "
+         "stuck-azimuth:from=S,to=S[,azimuth=D]; second-sender:from=S,to=S[,shift-deg=D]";
 }
 
 }  // namespace liod::fault

@@ -23,5 +23,11 @@ std::string apply(const ClockJump& f, Recording& r, Rng& rng);
 // imu_faults.cpp
 std::string apply(const CutImu& f, Recording& r, Rng& rng);
 std::string apply(const RockImu& f, Recording& r, Rng& rng);
+// vehicle_faults.cpp: what a vehicle meets on the road.
+std::string apply(const LidarReboot& f, Recording& r, Rng& rng);
+std::string apply(const DifopChange& f, Recording& r, Rng& rng);
+std::string apply(const Pothole& f, Recording& r, Rng& rng);
+std::string apply(const StuckAzimuth& f, Recording& r, Rng& rng);
+std::string apply(const SecondSender& f, Recording& r, Rng& rng);
 
 }  // namespace liod::fault

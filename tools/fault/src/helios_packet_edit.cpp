@@ -1,6 +1,7 @@
 #include "liod/fault/helios_packet_edit.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "liod/drivers/byte_order.hpp"
 #include "liod/drivers/rs_helios_difop.hpp"
@@ -23,6 +24,21 @@ void set_msop_time_ns(std::span<std::uint8_t> payload, std::int64_t time_ns) noe
   const std::int64_t micros_total = time_ns / 1000;
   drivers::store_be48(payload.data() + kMsopTimeSeconds, static_cast<std::uint64_t>(micros_total / 1'000'000));
   drivers::store_be32(payload.data() + kMsopTimeMicros, static_cast<std::uint32_t>(micros_total % 1'000'000));
+}
+
+void set_msop_counters(std::span<std::uint8_t> payload, std::uint32_t counter) noexcept {
+  drivers::store_be32(payload.data() + kMsopTopCounter, counter);
+  drivers::store_be32(payload.data() + kMsopBottomCounter, counter);
+}
+
+double difop_vertical_deg(std::span<const std::uint8_t> difop, std::size_t laser) noexcept {
+  return drivers::decode_calibration_angle(difop.data() + kDifopVerticalAngles + 3 * laser);
+}
+
+void set_difop_vertical_deg(std::span<std::uint8_t> difop, std::size_t laser, double degrees) noexcept {
+  std::uint8_t* p = difop.data() + kDifopVerticalAngles + 3 * laser;
+  p[0] = degrees < 0.0 ? 0x01 : 0x00;
+  drivers::store_be16(p + 1, static_cast<std::uint16_t>(std::lround(std::abs(degrees) * 100.0)));
 }
 
 float metres_per_range_unit(std::span<const std::uint8_t> payload) noexcept {

@@ -30,6 +30,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -235,6 +236,7 @@ class Pipeline {
   ImuRatePropagator propagator_;  // used by one thread: the IMU thread live, the odometry thread in lockstep
   AnchorExchange anchors_;        // live: odometry thread -> IMU thread
   PoseEvent imu_event_;           // the IMU thread's reused event
+  double imu_saturated_time_ = -std::numeric_limits<double>::infinity();  // used with propagator_, by its thread
   std::vector<std::function<void(const PoseEvent&)>> sinks_;
   std::vector<std::thread> threads_;
   int thread_count_ = 0;

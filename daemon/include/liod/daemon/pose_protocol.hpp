@@ -56,6 +56,9 @@ enum Flag : std::uint32_t {
   kClockJump = 1U << 7,     ///< a clock stepped within time.jump_flag_s, or the LiDAR's clock jumped in this scan or disagrees with the host
   kImuInconsistent = 1U << 8,  ///< the scan's registration contradicted the IMU prediction far beyond its covariance
   kImplausible = 1U << 9,   ///< the state failed the publishing gate (state_gate.hpp): not finite, too fast, absurd bias or covariance
+  kSweepTruncated = 1U << 10,  ///< sweeps before this scan were cut at the size cap and dropped (a stuck azimuth)
+  kCalibrationChanged = 1U << 11,  ///< the LiDAR's DIFOP disagreed with the calibration in use, or a new one began
+  kImuSaturated = 1U << 12,    ///< an IMU sample since the previous pose clipped at the sensor's range
 };
 
 struct PoseMessage {

@@ -14,6 +14,7 @@
 
 #include "liod/config.hpp"
 #include "liod/curvature_features.hpp"
+#include "liod/imu_range.hpp"
 #include "liod/drivers/rs_helios.hpp"
 #include "liod/drivers/spsc_ring.hpp"
 #include "liod/drivers/time_sync.hpp"
@@ -30,6 +31,8 @@ struct ScanItem {
   std::int64_t ready_steady_ns = 0;  ///< when the driver thread took the packet completing the sweep
   std::int64_t queued_ns = 0;        ///< how long that packet had waited in the socket (live)
   bool clock_jump = false;           ///< the LiDAR clock jumped during the sweep, or is off (pose::kClockJump)
+  bool sweep_truncated = false;      ///< sweeps before it were cut at the size cap and not passed on (pose::kSweepTruncated)
+  bool calibration_changed = false;  ///< the DIFOP disagreed with its calibration, or it is a new one's first (pose::kCalibrationChanged)
 };
 
 /// What a live transport counts below the decoding (socket, serial line, CAN), for health.
@@ -80,7 +83,7 @@ class LidarOutput {
   TransportCounters transport;
 
  private:
-  void on_sweep(Scan& scan);
+  void on_sweep(Scan& scan, const drivers::SweepInfo& info);
   /// The host - LiDAR offset the configuration's lidar_clock calls for now.
   std::int64_t clock_offset() const;
   /// The LiDAR's header time is within time.jump_threshold_s of the host's.
@@ -104,6 +107,7 @@ class LidarOutput {
   std::atomic<std::int64_t> heartbeat_{0};
   std::atomic<std::uint64_t> packets_{0}, lost_{0}, sweeps_{0}, jumps_{0}, steps_{0};
   std::uint64_t jumps_at_last_sweep_ = 0;
+  bool truncated_since_last_ = false;  // sweeps cut at the size cap since the last one passed on
   std::atomic<std::int64_t> last_sweep_{0}, step_correction_{0};
   std::atomic<double> last_step_time_{std::numeric_limits<double>::infinity()};
   std::atomic<std::int64_t> offset_used_{0};
@@ -127,6 +131,12 @@ class ImuOutput {
   std::uint64_t clock_steps() const noexcept { return steps_.load(std::memory_order_relaxed); }
   std::int64_t step_correction_ns() const noexcept { return step_correction_.load(std::memory_order_relaxed); }
   double last_step_time() const noexcept { return last_step_time_.load(std::memory_order_relaxed); }
+  /// Samples with an axis at the IMU's measurement range (flagged ImuSample::kSaturated, passed on)
+  /// and beyond it or not finite (dropped).
+  std::uint64_t saturated() const noexcept { return saturated_.load(std::memory_order_relaxed); }
+  std::uint64_t out_of_range() const noexcept { return out_of_range_.load(std::memory_order_relaxed); }
+  /// The IMU's measurement range (imu.gyro_range_rad_s, imu.accel_range_m_s2); set before the thread starts.
+  ImuRange range;
   /// Host-clock correction from PPS (added to host-stamped samples by the transports).
   std::atomic<std::int64_t> pps_correction_ns{0};
   /// Called with every sample as the transport delivered it (liod record).
@@ -144,7 +154,7 @@ class ImuOutput {
   double last_time_ = -std::numeric_limits<double>::infinity();  // of the last sample passed on
   ImuItem item_;
   std::atomic<std::int64_t> heartbeat_{0};
-  std::atomic<std::uint64_t> samples_{0}, steps_{0}, out_of_order_{0};
+  std::atomic<std::uint64_t> samples_{0}, steps_{0}, out_of_order_{0}, saturated_{0}, out_of_range_{0};
   std::atomic<std::int64_t> last_{0}, step_correction_{0};
   std::atomic<double> last_step_time_{std::numeric_limits<double>::infinity()};
 };

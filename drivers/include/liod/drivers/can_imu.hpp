@@ -13,7 +13,9 @@
 //
 // A sample is emitted when an angular-rate frame arrives and an acceleration frame arrived less
 // than `max_pair_age_s` before it (sensors send both at the same rate, the pair is one sample).
-// Table profile: one signal per quantity; a sample is emitted on the frame carrying gyro_x.
+// Table profile: one signal per quantity; a sample is emitted on the frame carrying gyro_x, when
+// every quantity arrived within `max_pair_age_s` before it: an axis whose frames stopped (or never
+// came) would otherwise be read as its last value, or 0, as if measured.
 
 #include <array>
 #include <cstdint>
@@ -43,6 +45,7 @@ struct CanImuStats {
   std::uint64_t accel_frames = 0;
   std::uint64_t not_available = 0;   ///< frames with an error / not-available value
   std::uint64_t unpaired = 0;        ///< rate frames without a recent acceleration frame
+  std::uint64_t stale_axes = 0;      ///< table: gyro_x frames without a recent value of every other quantity
   std::uint64_t samples = 0;
 };
 
@@ -71,7 +74,9 @@ class CanImuDecoder {
   Eigen::Vector3d accel_ = Eigen::Vector3d::Zero();
   std::int64_t accel_time_ns_ = 0;
   bool have_accel_ = false;
-  std::array<double, 6> values_{};  // table profile: latest value per quantity
+  std::array<double, 6> values_{};  // table profile: latest value per quantity...
+  std::array<std::int64_t, 6> value_times_ns_{};  // ...the time of its frame...
+  std::array<bool, 6> received_{};                 // ...and whether one came at all
 };
 
 /// A frame as SocketCAN delivers it, received at `time_ns`: the EFF/RTR/ERR flags split off the

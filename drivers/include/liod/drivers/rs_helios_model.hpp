@@ -44,6 +44,18 @@ inline constexpr std::int32_t kBlindZoneJump = 100;
 inline constexpr double kBlockPeriodS = 55.56e-6;  // §3
 inline constexpr double kLensOffsetRxM = 0.03498;  // §4
 inline constexpr double kDefaultRotationHz = 10.0;
+/// The slowest rotation the RS-Helios runs at: 300 rpm (it turns at 300, 600 or 1200 rpm; §3
+/// counts 3600 blocks per revolution at 5 Hz).
+inline constexpr double kMinRotationHz = 5.0;
+/// Firing blocks of one revolution at the slowest rotation, dual return (two blocks per firing on
+/// the 5515, §7): 2 x 1 / (5 Hz x 55.56 us) = 7200. The 16P's blocks hold both returns (§8): fewer.
+inline constexpr std::uint32_t kMaxBlocksPerRevolution =
+    2 * static_cast<std::uint32_t>(1.0 / (kMinRotationHz * kBlockPeriodS) + 0.5);
+/// A sweep longer than this many blocks is no revolution: the split azimuth was never crossed (a
+/// stalled motor, a stuck azimuth field, a foreign sender). A quarter above one revolution at the
+/// slowest rate, the margin for a motor running that much slow; 9000 blocks, at most 288 000 points.
+inline constexpr std::uint32_t kMaxSweepBlocks = kMaxBlocksPerRevolution / 4 * 5;
+static_assert(kMaxBlocksPerRevolution == 7200 && kMaxSweepBlocks == 9000);
 /// The header's seconds field is 48 bits; beyond this (year 2255) nanoseconds overflow int64, so
 /// a larger value can only be a corrupt packet.
 inline constexpr std::uint64_t kMaxTimestampSeconds = 9'000'000'000ULL;

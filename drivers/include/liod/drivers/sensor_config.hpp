@@ -9,6 +9,7 @@
 namespace liod {
 
 enum class LidarModel { kHelios5515, kHelios16P };
+enum class CalibrationUpdates { kPin, kFollow };
 
 struct LidarConfig {
   LidarModel model = LidarModel::kHelios5515;
@@ -19,14 +20,14 @@ struct LidarConfig {
   double max_range_m = 180.0;
   double split_azimuth_deg = 0.0;
   int packets_before_difop = 4096;  // without angles_csv: MSOP held until the first DIFOP (1 s is ~1500)
+  CalibrationUpdates calibration_updates = CalibrationUpdates::kPin;  // a later DIFOP's differing calibration: pin (flagged) | follow (at a sweep boundary)
 };
 
-// ---- live daemon (issue 6): drivers, time, threads, pose socket ----------------------------
 struct LidarDriverConfig {
   std::string bind_address = "0.0.0.0";   // local IPv4 address the MSOP/DIFOP sockets bind to
   std::string multicast_group;             // "" = unicast; else an IPv4 group to join
   std::string multicast_interface = "0.0.0.0";  // local address of the interface that joins the group
-  std::string source_address;              // "" = any sender; else only datagrams from this IPv4 address
+  std::string source_address;              // "" = the first RS-Helios sender; else only datagrams from this IPv4 address
   int receive_buffer_bytes = 16 * 1024 * 1024;  // SO_RCVBUF(FORCE): 1 s of MSOP is ~1.9 MB
   int batch = 64;                          // datagrams per recvmmsg call
   double lost_after_s = 0.5;               // no sweep for this long flags "LiDAR lost"

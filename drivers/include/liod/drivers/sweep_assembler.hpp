@@ -14,6 +14,7 @@
 #include <limits>
 
 #include "liod/drivers/packet_points.hpp"
+#include "liod/drivers/rs_helios_model.hpp"
 #include "liod/types.hpp"
 
 namespace liod::drivers {
@@ -31,6 +32,10 @@ struct SweepOptions {
   /// tells consumers how complete it is (rs_driver and nebula emit it too).
   bool emit_partial_on_flush = false;
   std::uint16_t beam_count = 32;
+  /// A sweep that reaches this many blocks without crossing the split is cut there (counted,
+  /// SweepInfo::truncated, as is the sweep that follows the cut): the memory a sweep holds stays
+  /// bounded whatever the azimuths say.
+  std::uint32_t max_blocks = helios::kMaxSweepBlocks;
   /// Capacity reserved up front for the working sweep (points).
   std::size_t reserve_points = 0;
 };
@@ -44,6 +49,12 @@ struct SweepInfo {
   /// Sum of the azimuth steps between consecutive firings, ignoring jumps > 1° (blind zone, loss).
   double azimuth_coverage_deg = 0.0;
   bool ended_by_gap = false;  ///< cut by a time gap rather than by the split azimuth
+  /// Cut at SweepOptions::max_blocks at its end or its start: the azimuth had not crossed the
+  /// split for that many blocks (begun at such a cut, it holds the rest of that run).
+  bool truncated = false;
+  /// Set by RsHeliosDecoder: the sensor's DIFOP disagreed with the calibration this sweep was
+  /// decoded with (CalibrationUpdates::Pin), or this is the first sweep of a new one (Follow).
+  bool calibration_changed = false;
   bool flushed = false;       ///< emitted by flush() (incomplete)
 };
 
@@ -57,8 +68,18 @@ class SweepAssembler {
   /// adds nothing. One
   /// that arrives after later ones (reordered on the way; older than the newest block by up to
   /// max_block_gap_s) joins the open sweep in time order without moving the split, or is
-  /// dropped when it is older than the open sweep (its sweep is already out).
+  /// dropped when it is older than the open sweep (its sweep is already out) or would take the
+  /// sweep past max_blocks.
   void add(const PacketPoints& packet);
+  /// Blocks [first, end) of `packet` only, for a packet fed in two parts at a sweep boundary (see
+  /// next_sweep_block): its head with first = 0 goes through add()'s checks; a tail (first > 0)
+  /// is taken as the rest of a packet already checked, and may be a new decoding of it.
+  void add_blocks(const PacketPoints& packet, std::size_t first, std::size_t end);
+  /// The block of `packet` with which add() would begin a new sweep (the split crossed, a time
+  /// gap, max_blocks reached; 0 when no sweep is open), or packet.block_count when all of it would
+  /// join the open sweep (or be ignored as a repeat, or merged as late).
+  [[nodiscard]] std::size_t next_sweep_block(const PacketPoints& packet) const noexcept;
+  [[nodiscard]] bool sweep_open() const noexcept { return open_; }
   /// End of stream: emits the open sweep if it has blocks and options.emit_partial_on_flush is
   /// set, otherwise drops it (counted). Then starts afresh.
   void flush();
@@ -69,8 +90,17 @@ class SweepAssembler {
   [[nodiscard]] std::uint64_t duplicate_packets() const noexcept { return duplicates_; }
   [[nodiscard]] std::uint64_t late_packets() const noexcept { return late_; }
   [[nodiscard]] std::uint64_t late_packets_dropped() const noexcept { return late_dropped_; }
+  [[nodiscard]] std::uint64_t truncated_sweeps() const noexcept { return truncated_; }
+  [[nodiscard]] std::size_t largest_sweep_points() const noexcept { return largest_points_; }
 
  private:
+  enum class Boundary : std::uint8_t { None, Gap, Split, Full };
+  [[nodiscard]] static std::int64_t block_time_ns(const PacketPoints& packet, std::size_t b) noexcept;
+  /// Whether a block at `block_ns`, `az` ends a sweep of `blocks` blocks whose last one was at
+  /// `last_ns`, `last_az`, and why.
+  [[nodiscard]] Boundary boundary(std::int64_t last_ns, std::uint16_t last_az, std::uint32_t blocks,
+                                  std::int64_t block_ns, std::uint16_t az) const noexcept;
+  [[nodiscard]] bool is_late(const PacketPoints& packet) const noexcept;
   [[nodiscard]] bool repeats_recent(const PacketPoints& packet) noexcept;
   void add_late(const PacketPoints& packet);
   void start_sweep(std::int64_t block_time_ns, std::uint16_t azimuth);
@@ -99,6 +129,8 @@ class SweepAssembler {
   std::uint64_t duplicates_ = 0;
   std::uint64_t late_ = 0;
   std::uint64_t late_dropped_ = 0;
+  std::uint64_t truncated_ = 0;
+  std::size_t largest_points_ = 0;
 };
 
 }  // namespace liod::drivers

@@ -16,12 +16,37 @@
 
 namespace liod::drivers {
 
+/// Which sender's datagrams the LiDAR driver takes: the configured address, or else the first
+/// sender of a datagram `lock_on` accepts (by IPv4 address, on every port: the sensor sends MSOP and
+/// DIFOP from one address). Anyone else who reaches the port is refused and counted. Used on the
+/// socket (UdpReceiver) and on a capture replayed (a tcpdump capture holds every sender).
+class SourceFilter {
+ public:
+  using Predicate = std::function<bool(std::span<const std::uint8_t>)>;
+  /// `fixed`: host-order address, 0 = none; `lock_on` unset: no lock (any sender).
+  SourceFilter(std::uint32_t fixed, Predicate lock_on) : source_(fixed), lock_on_(std::move(lock_on)) {}
+  /// Whether a datagram from `src_ip` passes (and takes the lock).
+  [[nodiscard]] bool accept(std::uint32_t src_ip, std::span<const std::uint8_t> payload);
+  [[nodiscard]] std::uint32_t source() const noexcept { return source_; }  ///< 0 = none yet
+  [[nodiscard]] std::uint64_t refused() const noexcept { return refused_; }
+  [[nodiscard]] std::uint32_t last_refused() const noexcept { return last_refused_; }  ///< its sender
+
+ private:
+  std::uint32_t source_;
+  Predicate lock_on_;
+  std::uint64_t refused_ = 0;
+  std::uint32_t last_refused_ = 0;
+};
+
 struct UdpReceiverOptions {
   std::string bind_address = "0.0.0.0";
   std::vector<std::uint16_t> ports;     ///< one socket per port
   std::string multicast_group;          ///< "" = unicast
   std::string multicast_interface = "0.0.0.0";
-  std::string source_address;           ///< "" = any sender
+  std::string source_address;           ///< "" = see lock_to_first_sender_of
+  /// With no source_address, SourceFilter's lock: the first sender of a datagram this accepts is
+  /// the only one taken from then on. Unset: any sender.
+  SourceFilter::Predicate lock_to_first_sender_of;
   int receive_buffer_bytes = 16 * 1024 * 1024;
   int batch = 64;
 };
@@ -37,7 +62,7 @@ struct ReceivedDatagram {
 struct UdpReceiverStats {
   std::uint64_t datagrams = 0;
   std::uint64_t bytes = 0;
-  std::uint64_t filtered_source = 0;  ///< from an address other than source_address
+  std::uint64_t filtered_source = 0;  ///< from an address other than source_address / the locked sender
   std::uint64_t truncated = 0;        ///< larger than the 2 KiB slot (not an RS-Helios packet)
   std::uint64_t kernel_drops = 0;     ///< SO_RXQ_OVFL: dropped by the kernel for a full buffer
 };
@@ -56,6 +81,7 @@ class UdpReceiver {
   std::size_t poll(int timeout_ms, const Handler& handler);
 
   const UdpReceiverStats& stats() const noexcept { return stats_; }
+  const SourceFilter& source_filter() const noexcept { return filter_; }
   /// The receive buffer size the kernel granted (first socket).
   int granted_receive_buffer() const noexcept { return granted_rcvbuf_; }
 
@@ -64,7 +90,7 @@ class UdpReceiver {
   UdpReceiverOptions options_;
   std::vector<int> fds_;
   std::vector<std::uint16_t> ports_;
-  std::uint32_t source_filter_ = 0;  // host order, 0 = none
+  SourceFilter filter_;
   std::vector<std::uint8_t> buffers_;
   std::vector<std::uint8_t> controls_;
   UdpReceiverStats stats_;
@@ -77,5 +103,7 @@ class UdpReceiver {
 
 /// Parses dotted IPv4 text into host order; throws std::runtime_error on bad text.
 std::uint32_t parse_ipv4(const std::string& text);
+/// Dotted text of a host-order IPv4 address.
+std::string format_ipv4(std::uint32_t address);
 
 }  // namespace liod::drivers

@@ -86,8 +86,46 @@ struct CutStart {
   double at_s = 0.0;
 };
 
+/// The LiDAR reboots at `at_s`: nothing for `outage_s` (an RS-Helios takes ~30 s to spin up), then
+/// its packet counters start again from 0 and its clock from the unsynchronised power-on epoch
+/// (the real unit's read 2017-01-06), its DIFOPs reporting no time sync.
+struct LidarReboot {
+  double at_s = 0.0;
+  double outage_s = 30.0;
+};
+/// The `count` DIFOPs from `at_s` on carry a different calibration: every elevation `vertical_deg`
+/// higher and, when `rpm` > 0, that motor speed (a spoofed or corrupted DIFOP, or another unit's).
+struct DifopChange {
+  double at_s = 0.0;
+  int count = 1;
+  double vertical_deg = 0.5;
+  int rpm = 0;
+};
+/// A pothole at `at_s`: the body is thrown up and back down by a bump of the vertical position
+/// h sin^2(pi t / duration), whose acceleration peaks at `peak_m_s2`; the accelerometer clips every
+/// axis at `range_m_s2` (its full range), so the samples of the peaks read the range.
+struct Pothole {
+  double at_s = 0.0;
+  double peak_m_s2 = 25.0 * 9.80665;
+  double range_m_s2 = 98.07;
+  double duration_s = 0.06;
+};
+/// In the window every block of every MSOP packet reads `azimuth_deg` (a stalled motor or a stuck
+/// azimuth field): the azimuth never crosses the sweep split.
+struct StuckAzimuth {
+  Window window;
+  double azimuth_deg = 100.0;
+};
+/// In the window a second host sends RS-Helios MSOP packets to the LiDAR's port: a copy of each of
+/// the sensor's, from the next IPv4 address, 0.1 ms later, its azimuths turned by `shift_deg`.
+struct SecondSender {
+  Window window;
+  double shift_deg = 180.0;
+};
+
 using Fault = std::variant<DropPackets, ReorderPackets, DuplicatePackets, StopLidar, CutImu, RockImu, ClockJump,
-                           CorruptPoints, GroundOnly, CutStart>;
+                           CorruptPoints, GroundOnly, CutStart, LidarReboot, DifopChange, Pothole, StuckAzimuth,
+                           SecondSender>;
 
 /// Parses the text form; throws std::invalid_argument naming the offending part.
 [[nodiscard]] Fault parse_fault(std::string_view text);
