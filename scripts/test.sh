@@ -9,22 +9,31 @@ cd "$(dirname "$0")/.."
 source scripts/trees.sh
 jobs=$(nproc)
 
+# CPU seconds (user + system) of the finished commands this script ran so far: the script's
+# children's times in /proc (fields cutime and cstime, in clock ticks).
+clock_ticks=$(getconf CLK_TCK)
+children_cpu() { awk -v hz="$clock_ticks" '{ printf "%d", ($16 + $17) / hz }' "/proc/$$/stat"; }
+
 stage_names=()
 stage_starts=()
+stage_cpu=()
 stage() {
   stage_names+=("$1")
   stage_starts+=("$SECONDS")
+  stage_cpu+=("$(children_cpu)")
   echo "== test.sh: $1 (${SECONDS} s since start)"
 }
-# Each stage's wall time, printed however the run ends.
+# Each stage's wall time and CPU time, printed however the run ends: on a machine shared with other
+# work, a stage whose wall time grew but not its CPU time waited for the machine.
 summary() {
   local status=$? i
-  local ends=("${stage_starts[@]:1}" "$SECONDS")
-  echo "== test.sh: stage durations"
+  local ends=("${stage_starts[@]:1}" "$SECONDS") cpu_ends=("${stage_cpu[@]:1}" "$(children_cpu)")
+  echo "== test.sh: stage durations (wall, and CPU of $(nproc) cores)"
   for i in "${!stage_names[@]}"; do
-    printf '   %-28s %5d s\n' "${stage_names[$i]}" "$((ends[i] - stage_starts[i]))"
+    printf '   %-24s %5d s  %6d CPU-s\n' "${stage_names[$i]}" "$((ends[i] - stage_starts[i]))" "$((cpu_ends[i] - stage_cpu[i]))"
   done
-  printf '   %-28s %5d s  (%s)\n' total "$SECONDS" "$([ "$status" -eq 0 ] && echo "all passed" || echo "FAILED")"
+  printf '   %-24s %5d s  %6d CPU-s  (%s)\n' total "$SECONDS" "$(children_cpu)" \
+    "$([ "$status" -eq 0 ] && echo "all passed" || echo "FAILED")"
 }
 trap summary EXIT
 
