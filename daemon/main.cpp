@@ -24,6 +24,92 @@ int check_config(const std::vector<std::string>& paths) {
   return 0;
 }
 
+// Each subcommand's options, filled by CLI11.
+struct Commands {
+  CLI::App* check = nullptr;
+  std::vector<std::string> check_paths;
+  CLI::App* decode = nullptr;
+  liod::DecodeOptions decode_options;
+  CLI::App* replay = nullptr;
+  std::vector<std::string> replay_configs;
+  liod::ReplayOptions replay_options;
+  CLI::App* run = nullptr;
+  std::vector<std::string> run_configs;
+  liod::RunOptions run_options;
+  CLI::App* record = nullptr;
+  std::vector<std::string> record_configs;
+  liod::RunOptions record_options;
+  CLI::App* pose = nullptr;
+  liod::PoseCommandOptions pose_options;
+  std::vector<std::string> pose_configs;
+};
+
+void add_offline_commands(CLI::App& app, Commands& c) {
+  c.check = app.add_subcommand("check-config", "Load and validate configuration files, then exit");
+  c.check->add_option("--config", c.check_paths, "configuration file(s), later ones override")->required()->check(CLI::ExistingFile);
+
+  c.decode = app.add_subcommand("decode", "Decode RS-Helios packets from a pcap into sweeps (PCD)");
+  c.decode->add_option("--pcap", c.decode_options.pcap, "capture file (pcap or pcapng)")->required();
+  c.decode->add_option("--angles", c.decode_options.angles_csv, "calibration CSV (vertical_deg,horizontal_deg) used until a DIFOP arrives");
+  c.decode->add_option("--out", c.decode_options.out_dir, "directory for one PCD file per sweep");
+
+  c.replay = app.add_subcommand("replay", "Run a recorded drive (LiDAR pcap + IMU CSV) through the odometry");
+  auto& r = c.replay_options;
+  c.replay->add_option("--config", c.replay_configs, "configuration file(s), later ones override")->required()->check(CLI::ExistingFile);
+  c.replay->add_option("--pcap", r.pcap, "LiDAR packets (pcap or pcapng)")->required()->check(CLI::ExistingFile);
+  c.replay->add_option("--imu", r.imu_csv, "IMU log (CSV, see README)")->required()->check(CLI::ExistingFile);
+  c.replay->add_option("--trajectory", r.trajectory_tum, "output: scan-rate poses, TUM format")->required();
+  c.replay->add_option("--imu-rate-trajectory", r.imu_rate_tum, "output: IMU-rate poses, TUM format");
+  c.replay->add_option("--scan-log", r.scan_log_csv, "output: per-scan status, features and timings (CSV)");
+  c.replay->add_flag("!--no-progress", r.progress, "no progress bar (one is drawn only on a terminal)");
+  r.progress = true;
+  c.replay->add_option("--pace", r.pace, "replay at this multiple of the recorded pace (1 = as recorded); default: as fast as possible, deterministic")->check(CLI::Range(0.0, 1000.0));
+  c.replay->add_option("--pose-socket", r.pose_socket, "also serve the poses on this Unix socket (see docs/pose-protocol.md)");
+}
+
+void add_live_commands(CLI::App& app, Commands& c) {
+  c.run = app.add_subcommand("run", "The live daemon: sensor drivers, odometry, pose socket (systemd: Type=notify)");
+  c.run->add_option("--config", c.run_configs, "configuration file(s), later ones override")->required()->check(CLI::ExistingFile);
+  c.run->add_option("--max-seconds", c.run_options.max_seconds, "stop by itself after this long (tests)");
+
+  c.record = app.add_subcommand("record", "Run live and also write what the drivers receive (lidar.pcap + imu.csv) for replay");
+  c.record->add_option("--config", c.record_configs, "configuration file(s), later ones override")->required()->check(CLI::ExistingFile);
+  c.record->add_option("--out", c.record_options.record_dir, "output directory (created)")->required();
+  c.record->add_option("--max-seconds", c.record_options.max_seconds, "stop by itself after this long");
+
+  c.pose = app.add_subcommand("pose", "Print the poses a running liod publishes");
+  auto& p = c.pose_options;
+  c.pose->add_option("--socket", p.socket, "pose socket path (default: output.pose_socket of --config, else /run/liod/pose.sock)");
+  c.pose->add_option("--config", c.pose_configs, "configuration file(s) to take the socket path from")->check(CLI::ExistingFile);
+  c.pose->add_flag("--json", p.json, "JSON lines (the server's text mode)");
+  c.pose->add_flag("--scan-only", p.scan_only, "scan-rate poses only");
+  c.pose->add_flag("--health", p.health, "also print health messages");
+  c.pose->add_option("--count", p.count, "exit after this many poses");
+  c.pose->add_option("--timeout", p.timeout_s, "exit after this many seconds without a message");
+}
+
+liod::Config load(const std::vector<std::string>& paths, const std::string& log_level) {
+  liod::Config config = liod::load_config(paths);
+  if (log_level.empty()) spdlog::set_level(spdlog::level::from_str(config.log.level));
+  return config;
+}
+
+int dispatch(Commands& c, const std::string& log_level) {
+  if (*c.check) return check_config(c.check_paths);
+  if (*c.decode) return liod::run_decode(c.decode_options, std::cout);
+  if (*c.replay) return liod::run_replay(load(c.replay_configs, log_level), c.replay_options, std::cout);
+  if (*c.run) return liod::run_daemon(load(c.run_configs, log_level), c.run_options);
+  if (*c.record) return liod::run_daemon(load(c.record_configs, log_level), c.record_options);
+  if (*c.pose) {
+    if (c.pose_options.socket.empty()) {
+      c.pose_options.socket =
+          c.pose_configs.empty() ? liod::Config{}.output.pose_socket : liod::load_config(c.pose_configs).output.pose_socket;
+    }
+    return liod::run_pose_client(c.pose_options, std::cout);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -32,77 +118,14 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   std::string log_level;
   app.add_option("--log-level", log_level, "trace|debug|info|warn|error|critical|off (overrides log.level)");
-
-  auto* check = app.add_subcommand("check-config", "Load and validate configuration files, then exit");
-  std::vector<std::string> check_paths;
-  check->add_option("--config", check_paths, "configuration file(s), later ones override")->required()->check(CLI::ExistingFile);
-
-  auto* decode = app.add_subcommand("decode", "Decode RS-Helios packets from a pcap into sweeps (PCD)");
-  liod::DecodeOptions decode_options;
-  decode->add_option("--pcap", decode_options.pcap, "capture file (pcap or pcapng)")->required();
-  decode->add_option("--angles", decode_options.angles_csv, "calibration CSV (vertical_deg,horizontal_deg) used until a DIFOP arrives");
-  decode->add_option("--out", decode_options.out_dir, "directory for one PCD file per sweep");
-
-  auto* replay = app.add_subcommand("replay", "Run a recorded drive (LiDAR pcap + IMU CSV) through the odometry");
-  std::vector<std::string> replay_configs;
-  liod::ReplayOptions replay_options;
-  replay->add_option("--config", replay_configs, "configuration file(s), later ones override")->required()->check(CLI::ExistingFile);
-  replay->add_option("--pcap", replay_options.pcap, "LiDAR packets (pcap or pcapng)")->required()->check(CLI::ExistingFile);
-  replay->add_option("--imu", replay_options.imu_csv, "IMU log (CSV, see README)")->required()->check(CLI::ExistingFile);
-  replay->add_option("--trajectory", replay_options.trajectory_tum, "output: scan-rate poses, TUM format")->required();
-  replay->add_option("--imu-rate-trajectory", replay_options.imu_rate_tum, "output: IMU-rate poses, TUM format");
-  replay->add_option("--scan-log", replay_options.scan_log_csv, "output: per-scan status, features and timings (CSV)");
-  replay->add_flag("!--no-progress", replay_options.progress, "no progress bar (one is drawn only on a terminal)");
-  replay_options.progress = true;
-  replay->add_option("--pace", replay_options.pace, "replay at this multiple of the recorded pace (1 = as recorded); default: as fast as possible, deterministic")->check(CLI::Range(0.0, 1000.0));
-  replay->add_option("--pose-socket", replay_options.pose_socket, "also serve the poses on this Unix socket (see docs/pose-protocol.md)");
-
-  auto* run = app.add_subcommand("run", "The live daemon: sensor drivers, odometry, pose socket (systemd: Type=notify)");
-  std::vector<std::string> run_configs;
-  liod::RunOptions run_options;
-  run->add_option("--config", run_configs, "configuration file(s), later ones override")->required()->check(CLI::ExistingFile);
-  run->add_option("--max-seconds", run_options.max_seconds, "stop by itself after this long (tests)");
-
-  auto* record = app.add_subcommand("record", "Run live and also write what the drivers receive (lidar.pcap + imu.csv) for replay");
-  std::vector<std::string> record_configs;
-  liod::RunOptions record_options;
-  record->add_option("--config", record_configs, "configuration file(s), later ones override")->required()->check(CLI::ExistingFile);
-  record->add_option("--out", record_options.record_dir, "output directory (created)")->required();
-  record->add_option("--max-seconds", record_options.max_seconds, "stop by itself after this long");
-
-  auto* pose = app.add_subcommand("pose", "Print the poses a running liod publishes");
-  liod::PoseCommandOptions pose_options;
-  std::vector<std::string> pose_configs;
-  pose->add_option("--socket", pose_options.socket, "pose socket path (default: output.pose_socket of --config, else /run/liod/pose.sock)");
-  pose->add_option("--config", pose_configs, "configuration file(s) to take the socket path from")->check(CLI::ExistingFile);
-  pose->add_flag("--json", pose_options.json, "JSON lines (the server's text mode)");
-  pose->add_flag("--scan-only", pose_options.scan_only, "scan-rate poses only");
-  pose->add_flag("--health", pose_options.health, "also print health messages");
-  pose->add_option("--count", pose_options.count, "exit after this many poses");
-  pose->add_option("--timeout", pose_options.timeout_s, "exit after this many seconds without a message");
-
+  Commands commands;
+  add_offline_commands(app, commands);
+  add_live_commands(app, commands);
   CLI11_PARSE(app, argc, argv);
 
   try {
     liod::setup_logging(log_level.empty() ? "info" : log_level);
-    if (*check) return check_config(check_paths);
-    if (*decode) return liod::run_decode(decode_options, std::cout);
-    if (*replay) {
-      const liod::Config config = liod::load_config(replay_configs);
-      if (log_level.empty()) spdlog::set_level(spdlog::level::from_str(config.log.level));
-      return liod::run_replay(config, replay_options, std::cout);
-    }
-    if (*run || *record) {
-      const liod::Config config = liod::load_config(*run ? run_configs : record_configs);
-      if (log_level.empty()) spdlog::set_level(spdlog::level::from_str(config.log.level));
-      return liod::run_daemon(config, *run ? run_options : record_options);
-    }
-    if (*pose) {
-      if (pose_options.socket.empty()) {
-        pose_options.socket = pose_configs.empty() ? liod::Config{}.output.pose_socket : liod::load_config(pose_configs).output.pose_socket;
-      }
-      return liod::run_pose_client(pose_options, std::cout);
-    }
+    return dispatch(commands, log_level);
   } catch (const liod::ConfigError& e) {
     spdlog::error("{}", e.what());
     return kConfigErrorExit;
@@ -110,5 +133,4 @@ int main(int argc, char** argv) {
     spdlog::error("{}", e.what());
     return 1;
   }
-  return 0;
 }

@@ -186,6 +186,8 @@ void declare_daemon(Schema& s, DaemonConfig& c) {
   s.integer("threads.imu_ring", &c.threads.imu_ring, 16, 1 << 20);
   s.integer("threads.pose_ring", &c.threads.pose_ring, 16, 1 << 20);
   s.integer("threads.keyframe_ring", &c.threads.keyframe_ring, 2, 65536);
+  s.real("threads.backend_max_lag_s", &c.threads.backend_max_lag_s, 0.1, 3600.0);
+  s.real("threads.backend_work_limit_s", &c.threads.backend_work_limit_s, 1.0, 3600.0);
 
 
   s.text("pose_socket.mode", &c.pose_socket.mode);
@@ -196,6 +198,9 @@ void declare_daemon(Schema& s, DaemonConfig& c) {
   s.boolean("pose_socket.imu_rate", &c.pose_socket.imu_rate);
   s.real("pose_socket.health_interval_s", &c.pose_socket.health_interval_s, 0.05, 3600.0);
   s.real("pose_socket.health_log_interval_s", &c.pose_socket.health_log_interval_s, 0.0, 86400.0);
+  s.real("pose_socket.max_speed_mps", &c.pose_socket.max_speed_mps, 1.0, 1000.0);
+  s.real("pose_socket.max_gyro_bias_rad_s", &c.pose_socket.max_gyro_bias_rad_s, 1e-4, 10.0);
+  s.real("pose_socket.max_accel_bias_m_s2", &c.pose_socket.max_accel_bias_m_s2, 1e-3, 100.0);
 }
 
 Schema declare_schema(Config& c) {

@@ -39,6 +39,7 @@ double ImuBuffer::latest_time() const {
 }
 
 std::vector<TimeSpan> ImuBuffer::gaps(double from, double to, double max_gap) const {
+  if (samples_.empty()) return to > from ? std::vector<TimeSpan>{{from, to}} : std::vector<TimeSpan>{};
   std::vector<TimeSpan> gaps;
   auto add = [&](double a, double b) {
     a = std::max(a, from);

@@ -74,8 +74,9 @@ std::shared_ptr<KeyframeSpill> make_spill(const Config& config) {
 
 }  // namespace
 
-BackendWorker::BackendWorker(const Config& config)
+BackendWorker::BackendWorker(const Config& config, BackendWorkerOptions options)
     : config_(config),
+      options_(std::move(options)),
       // The writer first: it clears the temp files a crash left in the state directory.
       writer_(config.backend.persist ? std::make_unique<StateWriter>(config.output.state_dir) : nullptr),
       backend_(config, make_spill(config)) {}
@@ -85,6 +86,7 @@ BackendWorker::~BackendWorker() = default;
 bool BackendWorker::process(const Keyframe& keyframe) {
   const std::size_t checks_before = backend_.loop_checks().size();
   bool closed = false;
+  if (options_.before_work) options_.before_work(keyframe);
   try {
     closed = backend_.add_keyframe(keyframe);
   } catch (const std::exception& e) {

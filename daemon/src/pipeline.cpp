@@ -29,10 +29,17 @@ std::uint32_t status_flags(std::uint32_t odometry_status) {
 }
 
 std::uint32_t with_ok(std::uint32_t f) {
-  constexpr std::uint32_t kBad =
-      pose::kInitializing | pose::kDegenerate | pose::kImuLost | pose::kLidarLost | pose::kImuInconsistent;
+  constexpr std::uint32_t kBad = pose::kInitializing | pose::kDegenerate | pose::kImuLost | pose::kLidarLost |
+                                 pose::kImuInconsistent | pose::kImplausible;
   return (f & kBad) == 0 ? f | pose::kOk : f;
 }
+
+// What a scan pose passes on to the IMU-rate poses propagated from it: every flag of the scan's
+// own that kept it from `ok` (an IMU-rate pose is the scan's state moved on by the IMU, no better
+// than it). The host-time flags (IMU or LiDAR lost now, a clock step) each IMU-rate pose gets
+// afresh from live_flags.
+constexpr std::uint32_t kInheritedFlags = pose::kInitializing | pose::kDegenerate | pose::kFewFeatures |
+                                          pose::kImuLost | pose::kImuInconsistent | pose::kImplausible;
 
 void fill_state(pose::PoseMessage& m, const NavState& s) {
   m.time = s.time;
@@ -86,7 +93,8 @@ Pipeline::Pipeline(const Config& config, PipelineOptions options)
   imu_out_ = std::make_unique<ImuOutput>(imu_ring_, lossless, source_stop_,
                                          bridge ? static_cast<std::int64_t>(config_.time.jump_threshold_s * 1e9) : 0);
   if (!lossless && options_.imu_rate_poses) imu_out_->on_sample = [this](const ImuItem& item) { publish_imu_pose(item); };
-  if (config_.backend.enabled) backend_ = std::make_unique<BackendWorker>(config_);
+  if (config_.backend.enabled) backend_ = std::make_unique<BackendWorker>(config_, options_.backend);
+  state_limits_ = state_limits(config_);
 }
 
 Pipeline::~Pipeline() {
@@ -140,7 +148,7 @@ void Pipeline::start(std::unique_ptr<LidarSource> lidar, std::unique_ptr<ImuSour
   std::unique_ptr<PoseServer> server;
   if (!options_.pose_socket.empty()) server = std::make_unique<PoseServer>(options_.pose_socket, config_.pose_socket);
   const auto now = steady_ns();
-  hb_odometry_ = hb_publisher_ = hb_backend_ = now;
+  for (Heartbeat* hb : {&hb_odometry_, &hb_publisher_, &hb_backend_}) hb->beat(now);
   auto wrap = [this](const char* name, auto body) {
     return [this, name, body]() mutable {
       try {
@@ -246,9 +254,31 @@ bool Pipeline::make_imu_pose(const ImuItem& item, PoseEvent& ev) {
   ev.message.covariance = anchor.pose_covariance;  // of the last scan update (not propagated)
   std::uint32_t f = anchor.flags;
   if (dead_reckoned_s > config_.drivers.lidar.lost_after_s) f |= pose::kLidarLost;
+  // The anchor's covariance was checked with its scan; what the IMU adds can still overflow.
+  if (check_state(*state, state_limits_) != StateFault::kNone) {
+    f |= pose::kImplausible;
+    implausible_poses_.fetch_add(1, std::memory_order_relaxed);
+  }
   ev.message.flags = with_ok(f | live_flags(state->time));
   ev.input_steady_ns = item.arrival_steady_ns;
   return true;
+}
+
+std::uint32_t Pipeline::gate_scan_state(const OdometryResult& result) {
+  StateFault fault = check_state(result.state, state_limits_);
+  if (fault == StateFault::kNone) fault = check_covariance(result.covariance);
+  const bool was_plausible = scan_state_plausible_;
+  scan_state_plausible_ = fault == StateFault::kNone;
+  if (scan_state_plausible_) {
+    if (!was_plausible) spdlog::info("odometry state plausible again at t={:.3f}", result.state.time);
+    return 0;
+  }
+  implausible_poses_.fetch_add(1, std::memory_order_relaxed);
+  if (was_plausible) {
+    spdlog::error("odometry state implausible at t={:.3f}: {} (speed {:.3g} m/s); poses published without ok",
+                  result.state.time, to_string(fault), result.state.velocity.norm());
+  }
+  return pose::kImplausible;
 }
 
 void Pipeline::publish_imu_pose(const ImuItem& item) {
@@ -262,155 +292,184 @@ void Pipeline::push_pose(PoseEvent& ev) {
   else pose_ring_.try_push(ev);
 }
 
-void Pipeline::odometry_thread() {
-  apply_thread_config(config_.threads.odometry, "liod-odometry");
-  LidarInertialOdometry odometry(config_);
-  const bool lockstep = options_.ordering == Ordering::Lockstep;
-  const bool imu_poses = options_.imu_rate_poses;
-  const auto imu_wait_ns = static_cast<std::int64_t>(config_.time.imu_wait_s * 1e9);
+namespace {
+
+// What a scan's result says of its processing, for the scan log.
+ScanDiagnostics scan_diagnostics(const OdometryResult& result, double features_ms) {
+  ScanDiagnostics d;
+  d.status = result.status;
+  d.points = result.points;
+  d.edges = result.edge_features;
+  d.planes = result.plane_features;
+  d.residuals = result.residuals;
+  d.iterations = result.iterations;
+  d.rms_m = result.rms_residual_m;
+  d.min_eigenvalue = result.min_translation_eigenvalue;
+  d.hausdorff_m = result.hausdorff_m;
+  d.deskew_ms = result.deskew_ms;
+  d.features_ms = features_ms;
+  d.registration_ms = result.registration_ms;
+  d.map_ms = result.map_ms;
+  const Eigen::Matrix3d world_to_body = result.state.rotation.transpose();
+  d.velocity_body = world_to_body * result.state.velocity;
+  d.velocity_correction_body = result.velocity_correction_body;
+  d.accel_bias = result.state.accel_bias;
+  d.gyro_bias = result.state.gyro_bias;
+  d.gravity_body = world_to_body * result.state.gravity;
+  d.forward_hold = result.forward_hold;
+  return d;
+}
+
+}  // namespace
+
+// The odometry thread's state between its steps.
+struct Pipeline::OdometryLoop {
+  explicit OdometryLoop(const Config& config) : odometry(config) {}
+  LidarInertialOdometry odometry;
+  bool lockstep = false;
+  bool imu_poses = false;
+  std::int64_t imu_wait_ns = 0;
   std::deque<ScanItem> pending;
   ScanItem spare;
   ImuItem held;
   bool have_held = false;
   Eigen::Vector3d last_gyro = Eigen::Vector3d::Zero();
   PoseEvent imu_event;
-
-  auto feed = [&](const ImuItem& item) {
-    odometry.add_imu(item.sample);
-    ++totals_.imu_fed;
-    odometry_imu_dropped_.store(odometry.dropped_imu_samples(), std::memory_order_relaxed);
-    last_gyro = item.sample.gyro;
-    // Live, the IMU thread makes the IMU-rate poses (publish_imu_pose).
-    if (lockstep && imu_poses && make_imu_pose(item, imu_event)) push_pose(imu_event);
-  };
-
-  auto process = [&](ScanItem& item) {
-    const std::int64_t start_ns = steady_ns();
-    hb_odometry_.store(start_ns, std::memory_order_relaxed);
-    const auto result = odometry.process(item.scan, item.features);
-    ++totals_.scans;
-    if (!result) return;
-    ++totals_.processed;
-    scans_processed_.fetch_add(1, std::memory_order_relaxed);
-    const double ms = result->deskew_ms + item.features_ms + result->registration_ms;
-    totals_.front_end_ms.push_back(ms);
-    last_process_ms_.store(ms + result->map_ms, std::memory_order_relaxed);
-    if (result->status & kStatusDegenerate) ++totals_.degenerate;
-    if (result->status & kStatusImuInconsistent) imu_inconsistent_scans_.fetch_add(1, std::memory_order_relaxed);
-    if (result->status & kStatusKeyframe) ++totals_.keyframes;
-    PoseEvent ev;
-    ev.message.type = pose::MessageType::ScanPose;
-    fill_state(ev.message, result->state);
-    ev.message.angular_rate = last_gyro - result->state.gyro_bias;
-    ev.message.covariance = pose::pose_covariance_from_state(result->covariance);
-    const std::uint32_t scan_flags = status_flags(result->status);
-    std::uint32_t f = scan_flags | live_flags(result->state.time);
-    f &= ~static_cast<std::uint32_t>(pose::kLidarLost);  // this pose comes from a scan
-    if (item.clock_jump) f |= pose::kClockJump;
-    ev.message.flags = with_ok(f);
-    auto& d = ev.diagnostics;
-    d.status = result->status;
-    d.points = result->points;
-    d.edges = result->edge_features;
-    d.planes = result->plane_features;
-    d.residuals = result->residuals;
-    d.iterations = result->iterations;
-    d.rms_m = result->rms_residual_m;
-    d.min_eigenvalue = result->min_translation_eigenvalue;
-    d.hausdorff_m = result->hausdorff_m;
-    d.deskew_ms = result->deskew_ms;
-    d.features_ms = item.features_ms;
-    d.registration_ms = result->registration_ms;
-    d.map_ms = result->map_ms;
-    const Eigen::Matrix3d world_to_body = result->state.rotation.transpose();
-    d.velocity_body = world_to_body * result->state.velocity;
-    d.velocity_correction_body = result->velocity_correction_body;
-    d.accel_bias = result->state.accel_bias;
-    d.gyro_bias = result->state.gyro_bias;
-    d.gravity_body = world_to_body * result->state.gravity;
-    d.forward_hold = result->forward_hold;
-    ev.input_steady_ns = item.ready_steady_ns - item.queued_ns;
-    ev.queued_ns = item.queued_ns;
-    ev.process_start_ns = start_ns;
-    ev.process_end_ns = steady_ns();
-    push_pose(ev);
-    if (imu_poses && !(result->status & kStatusSpeedUnknown)) {
-      // IMU-rate poses are as (un)reliable as the scan they start from: while it is initialising
-      // they are flagged so; before any speed is known (the first scan) there are none: dead
-      // reckoning at zero speed from a rolling start would run away.
-      const ScanAnchor anchor{result->state, odometry.gravity(), ev.message.covariance,
-                              scan_flags & (pose::kInitializing | pose::kDegenerate | pose::kFewFeatures)};
-      if (lockstep) propagator_.set_anchor(anchor);
-      else anchors_.publish(anchor);
-    }
-    if ((result->status & kStatusKeyframe) && !odometry.keyframes().empty()) {
-      KeyframeEvent k{std::make_shared<const Keyframe>(odometry.keyframes().back()), result->covariance};
-      if (lockstep) keyframe_ring_.push_wait(k, stop_);
-      else keyframe_ring_.try_push(k);
-    }
-  };
-  auto retire_front = [&]() {
+  void retire_front() {
     spare = std::move(pending.front());
     pending.pop_front();
-  };
-
-  const std::size_t max_pending = scan_ring_.capacity();
-  while (!stop_.load(std::memory_order_relaxed)) {
-    hb_odometry_.store(steady_ns(), std::memory_order_relaxed);
-    bool progress = false;
-    if (lockstep) {
-      if (pending.empty() && scan_ring_.try_pop(spare)) {
-        pending.push_back(std::move(spare));
-        progress = true;
-      }
-      if (!pending.empty()) {
-        const double end = odometry.scan_end_time(pending.front().scan);
-        for (;;) {
-          if (!have_held) have_held = imu_ring_.try_pop(held);
-          if (!have_held || held.sample.time > end + 0.02) break;
-          feed(held);
-          have_held = false;
-          progress = true;
-        }
-        const bool imu_ended = !have_held && imu_ring_.drained();
-        // A held sample is past the scan's end: an IMU gap left nothing up to the end, and
-        // waiting for it would block both sources for good. Process now (flagged IMU gap).
-        const bool imu_passed = have_held && held.sample.time > end;
-        if (odometry.latest_imu_time() >= end || imu_passed || imu_ended) {
-          process(pending.front());
-          retire_front();
-          progress = true;
-        }
-      } else if (scan_ring_.drained()) {
-        break;  // like the single-threaded replay, IMU samples after the last scan are not used
-      }
-    } else {
-      while (pending.size() < max_pending && scan_ring_.try_pop(spare)) {
-        pending.push_back(std::move(spare));
-        progress = true;
-      }
-      auto process_ready = [&]() {
-        while (!pending.empty()) {
-          const double end = odometry.scan_end_time(pending.front().scan);
-          const bool imu_there = odometry.latest_imu_time() >= end;
-          const bool waited = steady_ns() - pending.front().ready_steady_ns > imu_wait_ns;
-          if (!imu_there && !waited && !imu_ring_.drained()) break;
-          process(pending.front());
-          retire_front();
-          progress = true;
-        }
-      };
-      process_ready();
-      while (imu_ring_.try_pop(held)) {
-        feed(held);
-        progress = true;
-        process_ready();
-      }
-      if (pending.empty() && scan_ring_.drained() && imu_ring_.drained()) break;
-    }
-    if (!progress) odometry_wakeup_.wait(std::chrono::milliseconds(lockstep ? 1 : 5));
   }
-  totals_.imu_dropped = odometry.dropped_imu_samples();
+};
+
+void Pipeline::feed_imu(OdometryLoop& loop, const ImuItem& item) {
+  loop.odometry.add_imu(item.sample);
+  ++totals_.imu_fed;
+  odometry_imu_dropped_.store(loop.odometry.dropped_imu_samples(), std::memory_order_relaxed);
+  loop.last_gyro = item.sample.gyro;
+  // Live, the IMU thread makes the IMU-rate poses (publish_imu_pose).
+  if (loop.lockstep && loop.imu_poses && make_imu_pose(item, loop.imu_event)) push_pose(loop.imu_event);
+}
+
+void Pipeline::process_scan(OdometryLoop& loop, ScanItem& item) {
+  const std::int64_t start_ns = steady_ns();
+  hb_odometry_.beat(start_ns);
+  const auto result = loop.odometry.process(item.scan, item.features);
+  ++totals_.scans;
+  if (!result) return;
+  ++totals_.processed;
+  scans_processed_.fetch_add(1, std::memory_order_relaxed);
+  const double ms = result->deskew_ms + item.features_ms + result->registration_ms;
+  totals_.front_end_ms.push_back(ms);
+  last_process_ms_.store(ms + result->map_ms, std::memory_order_relaxed);
+  if (result->status & kStatusDegenerate) ++totals_.degenerate;
+  if (result->status & kStatusImuInconsistent) imu_inconsistent_scans_.fetch_add(1, std::memory_order_relaxed);
+  if (result->status & kStatusKeyframe) ++totals_.keyframes;
+  PoseEvent ev;
+  ev.message.type = pose::MessageType::ScanPose;
+  fill_state(ev.message, result->state);
+  ev.message.angular_rate = loop.last_gyro - result->state.gyro_bias;
+  ev.message.covariance = pose::pose_covariance_from_state(result->covariance);
+  const std::uint32_t scan_flags = status_flags(result->status) | gate_scan_state(*result);
+  std::uint32_t f = scan_flags | live_flags(result->state.time);
+  f &= ~static_cast<std::uint32_t>(pose::kLidarLost);  // this pose comes from a scan
+  if (item.clock_jump) f |= pose::kClockJump;
+  ev.message.flags = with_ok(f);
+  ev.diagnostics = scan_diagnostics(*result, item.features_ms);
+  ev.input_steady_ns = item.ready_steady_ns - item.queued_ns;
+  ev.queued_ns = item.queued_ns;
+  ev.process_start_ns = start_ns;
+  ev.process_end_ns = steady_ns();
+  push_pose(ev);
+  if (loop.imu_poses && !(result->status & kStatusSpeedUnknown)) {
+    // IMU-rate poses are as (un)reliable as the scan they start from: while it is initialising
+    // they are flagged so; before any speed is known (the first scan) there are none: dead
+    // reckoning at zero speed from a rolling start would run away.
+    const ScanAnchor anchor{result->state, loop.odometry.gravity(), ev.message.covariance, scan_flags & kInheritedFlags};
+    if (loop.lockstep) propagator_.set_anchor(anchor);
+    else anchors_.publish(anchor);
+  }
+  if ((result->status & kStatusKeyframe) && !loop.odometry.keyframes().empty()) {
+    KeyframeEvent k{std::make_shared<const Keyframe>(loop.odometry.keyframes().back()), result->covariance, steady_ns()};
+    if (loop.lockstep) keyframe_ring_.push_wait(k, stop_);
+    else keyframe_ring_.try_push(k);
+  }
+}
+
+// Replay as fast as possible: each scan once the IMU has reached its end, deterministically.
+// Returns whether anything moved; `done` once the scans have run out.
+bool Pipeline::lockstep_step(OdometryLoop& loop, bool& done) {
+  bool progress = false;
+  if (loop.pending.empty() && scan_ring_.try_pop(loop.spare)) {
+    loop.pending.push_back(std::move(loop.spare));
+    progress = true;
+  }
+  if (loop.pending.empty()) {
+    done = scan_ring_.drained();  // like the single-threaded replay, IMU samples after the last scan are not used
+    return progress;
+  }
+  const double end = loop.odometry.scan_end_time(loop.pending.front().scan);
+  for (;;) {
+    if (!loop.have_held) loop.have_held = imu_ring_.try_pop(loop.held);
+    if (!loop.have_held || loop.held.sample.time > end + 0.02) break;
+    feed_imu(loop, loop.held);
+    loop.have_held = false;
+    progress = true;
+  }
+  const bool imu_ended = !loop.have_held && imu_ring_.drained();
+  // A held sample is past the scan's end: an IMU gap left nothing up to the end, and waiting for
+  // it would block both sources for good. Process now (flagged IMU gap).
+  const bool imu_passed = loop.have_held && loop.held.sample.time > end;
+  if (loop.odometry.latest_imu_time() >= end || imu_passed || imu_ended) {
+    process_scan(loop, loop.pending.front());
+    loop.retire_front();
+    progress = true;
+  }
+  return progress;
+}
+
+// Live (and paced replay): scans as they arrive, each once the IMU has reached its end or it has
+// waited time.imu_wait_s for it.
+bool Pipeline::arrival_step(OdometryLoop& loop, bool& done) {
+  bool progress = false;
+  while (loop.pending.size() < scan_ring_.capacity() && scan_ring_.try_pop(loop.spare)) {
+    loop.pending.push_back(std::move(loop.spare));
+    progress = true;
+  }
+  auto process_ready = [&]() {
+    while (!loop.pending.empty()) {
+      const double end = loop.odometry.scan_end_time(loop.pending.front().scan);
+      const bool imu_there = loop.odometry.latest_imu_time() >= end;
+      const bool waited = steady_ns() - loop.pending.front().ready_steady_ns > loop.imu_wait_ns;
+      if (!imu_there && !waited && !imu_ring_.drained()) break;
+      process_scan(loop, loop.pending.front());
+      loop.retire_front();
+      progress = true;
+    }
+  };
+  process_ready();
+  while (imu_ring_.try_pop(loop.held)) {
+    feed_imu(loop, loop.held);
+    progress = true;
+    process_ready();
+  }
+  done = loop.pending.empty() && scan_ring_.drained() && imu_ring_.drained();
+  return progress;
+}
+
+void Pipeline::odometry_thread() {
+  apply_thread_config(config_.threads.odometry, "liod-odometry");
+  OdometryLoop loop(config_);
+  loop.lockstep = options_.ordering == Ordering::Lockstep;
+  loop.imu_poses = options_.imu_rate_poses;
+  loop.imu_wait_ns = static_cast<std::int64_t>(config_.time.imu_wait_s * 1e9);
+  while (!stop_.load(std::memory_order_relaxed)) {
+    hb_odometry_.beat(steady_ns());
+    bool done = false;
+    const bool progress = loop.lockstep ? lockstep_step(loop, done) : arrival_step(loop, done);
+    if (done) break;
+    if (!progress) odometry_wakeup_.wait(std::chrono::milliseconds(loop.lockstep ? 1 : 5));
+  }
+  totals_.imu_dropped = loop.odometry.dropped_imu_samples();
   pose_ring_.close();
   keyframe_ring_.close();
 }
@@ -424,7 +483,7 @@ void Pipeline::publisher_thread(PoseServer* server) {
   auto next_housekeeping = std::chrono::steady_clock::now();
   HealthRates rates;
   while (!stop_.load(std::memory_order_relaxed)) {
-    hb_publisher_.store(steady_ns(), std::memory_order_relaxed);
+    hb_publisher_.beat(steady_ns());
     fds.clear();
     fds.push_back({publisher_wakeup_.fd(), POLLIN, 0});
     if (server != nullptr) server->fill_pollfds(fds);
@@ -472,19 +531,49 @@ void Pipeline::backend_thread() {
   }
   KeyframeEvent k;
   while (!stop_.load(std::memory_order_relaxed)) {
-    hb_backend_.store(steady_ns(), std::memory_order_relaxed);
+    hb_backend_.beat(steady_ns());
     bool any = false;
     while (keyframe_ring_.try_pop(k)) {
       // Keyframes in ring order: the same sequence on every lockstep replay (deterministic).
-      if (backend_) backend_->process(*k.keyframe);
-      backend_keyframes_.fetch_add(1, std::memory_order_relaxed);
+      backend_unit(k);
       k.keyframe.reset();
       any = true;
     }
     if (keyframe_ring_.drained()) break;
     if (!any) backend_wakeup_.wait(std::chrono::milliseconds(100));
   }
-  if (backend_) backend_->finish();
+  if (backend_) {
+    hb_backend_.begin_work(steady_ns());
+    backend_->finish();
+    hb_backend_.end_work(steady_ns());
+  }
+}
+
+void Pipeline::backend_unit(const KeyframeEvent& k) {
+  backend_keyframes_.fetch_add(1, std::memory_order_relaxed);
+  if (!backend_) return;
+  const std::int64_t start = steady_ns();
+  const double waited_s = static_cast<double>(start - k.queued_steady_ns) * 1e-9;
+  // Live, a keyframe that waited this long means the backend fell behind (a loop check or solve
+  // slower than the keyframes come, a slow disk): it is skipped, loop check and all, so that the
+  // backend works on the present rather than on a growing backlog. The graph stays one chain: the
+  // next keyframe's odometry factor spans the skipped ones. Replay in lockstep waits instead.
+  if (options_.ordering != Ordering::Lockstep && waited_s > config_.threads.backend_max_lag_s) {
+    if (backend_shed_.fetch_add(1, std::memory_order_relaxed) == backend_shed_logged_) {
+      spdlog::warn("backend behind: keyframe {} waited {:.1f} s (threads.backend_max_lag_s {} s); skipping keyframes "
+                   "until it catches up",
+                   k.keyframe->id, waited_s, config_.threads.backend_max_lag_s);
+    }
+    return;
+  }
+  const std::uint64_t shed = backend_shed_.load(std::memory_order_relaxed);
+  if (shed != backend_shed_logged_) {
+    spdlog::info("backend caught up: {} keyframes skipped without a loop check so far", shed);
+    backend_shed_logged_ = shed;
+  }
+  hb_backend_.begin_work(start);
+  backend_->process(*k.keyframe);
+  hb_backend_.end_work(steady_ns());
 }
 
 std::vector<std::string> Pipeline::stalled(std::chrono::milliseconds max_age) const {
@@ -496,9 +585,10 @@ std::vector<std::string> Pipeline::stalled(std::chrono::milliseconds max_age) co
   };
   check("lidar", lidar_out_->heartbeat_ns());
   if (imu_source_) check("imu", imu_out_->heartbeat_ns());
-  check("odometry", hb_odometry_.load());
-  check("publisher", hb_publisher_.load());
-  check("backend", hb_backend_.load());
+  if (hb_odometry_.stalled(now, limit, limit)) out.emplace_back("odometry");
+  if (hb_publisher_.stalled(now, limit, limit)) out.emplace_back("publisher");
+  const auto work_limit = static_cast<std::int64_t>(config_.threads.backend_work_limit_s * 1e9);
+  if (hb_backend_.stalled(now, limit, work_limit)) out.emplace_back("backend");
   if (!error().empty()) out.emplace_back("error: " + error());
   return out;
 }
@@ -538,6 +628,7 @@ std::string Pipeline::health_json(HealthRates& rates) const {
     << "},\"odometry\":{\"scans\":" << scans << ",\"scan_rate_hz\":" << rate(scans, rates.scans)
     << ",\"last_process_ms\":" << last_process_ms_.load() << ",\"imu_poses_withheld\":" << imu_poses_withheld_.load()
     << ",\"imu_inconsistent_scans\":" << imu_inconsistent_scans_.load()
+    << ",\"implausible_poses\":" << implausible_poses_.load()
     << "},\"rings\":{";
   ring("scan", scan_ring_);
   j << ',';
@@ -562,7 +653,8 @@ std::string Pipeline::health_json(HealthRates& rates) const {
   latency("imu_to_socket", imu_latency_);
   j << "},\"socket\":{\"clients\":" << socket_clients_.load() << ",\"skipped_messages\":"
     << socket_skipped_.load() << ",\"dropped_clients\":" << socket_dropped_.load()
-    << "},\"backend\":{\"keyframes\":" << backend_keyframes_.load() << "}}";
+    << "},\"backend\":{\"keyframes\":" << backend_keyframes_.load() << ",\"keyframes_shed\":" << backend_shed_.load()
+    << ",\"busy_s\":" << hb_backend_.busy_s(steady_ns()) << "}}";
   rates.time = now;
   rates.packets = packets;
   rates.imu = imu;

@@ -88,7 +88,7 @@ void encode_health(const std::string& json, std::uint32_t sequence, std::vector<
 
 std::string flag_names(std::uint32_t flags) {
   static const char* kNames[] = {"initializing", "ok",           "degenerate", "imu_lost",        "lidar_lost",
-                                 "keyframe",     "few_features", "clock_jump", "imu_inconsistent"};
+                                 "keyframe",     "few_features", "clock_jump", "imu_inconsistent", "implausible"};
   std::string s;
   for (int i = 0; i < static_cast<int>(std::size(kNames)); ++i) {
     if ((flags & (1U << i)) == 0) continue;
@@ -103,10 +103,14 @@ std::string to_json_line(const PoseMessage& m) {
   s.reserve(900);
   s += m.type == MessageType::ScanPose ? "{\"type\":\"scan\"" : "{\"type\":\"imu\"";
   s += ",\"seq\":" + std::to_string(m.sequence);
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.9f", m.time);
   s += ",\"t\":";
-  s += buf;
+  if (std::isfinite(m.time)) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.9f", m.time);
+    s += buf;
+  } else {
+    s += "null";  // JSON has no NaN (an implausible pose may carry one)
+  }
   s += ",\"p\":";
   json_array(s, m.position.data(), 3);
   const double q[4] = {m.orientation.x(), m.orientation.y(), m.orientation.z(), m.orientation.w()};

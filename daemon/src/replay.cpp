@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -46,6 +48,74 @@ class ProgressBar {
   int last_ = -1;
 };
 
+/// The per-scan CSV (--scan-log): status, features, timings and the filter's state.
+class ScanLog {
+ public:
+  explicit ScanLog(const std::string& path) : path_(path) {
+    if (path.empty()) return;
+    out_.open(path);
+    if (!out_) throw std::runtime_error(path + ": cannot open for writing");
+    out_ << "time,status,points,edges,planes,residuals,iterations,rms_m,min_eigenvalue,hausdorff_m,"
+            "deskew_ms,features_ms,registration_ms,map_ms,"
+            "velocity_x,velocity_y,velocity_z,velocity_correction_x,velocity_correction_y,velocity_correction_z,"
+            "accel_bias_x,accel_bias_y,accel_bias_z,gyro_bias_x,gyro_bias_y,gyro_bias_z,"
+            "gravity_x,gravity_y,gravity_z,forward_hold\n";
+  }
+  void write(double time, const ScanDiagnostics& d) {
+    if (!out_.is_open() || !out_) return;  // after a failed write the stream writes nothing more
+    out_ << std::fixed << std::setprecision(6) << time << ',' << d.status << ',' << d.points << ',' << d.edges << ','
+         << d.planes << ',' << d.residuals << ',' << d.iterations << ',' << std::setprecision(4) << d.rms_m << ','
+         << d.min_eigenvalue << ',' << d.hausdorff_m << ',' << d.deskew_ms << ',' << d.features_ms << ','
+         << d.registration_ms << ',' << d.map_ms << std::setprecision(6);
+    for (const Eigen::Vector3d* v : {&d.velocity_body, &d.velocity_correction_body, &d.accel_bias, &d.gyro_bias, &d.gravity_body}) {
+      out_ << ',' << v->x() << ',' << v->y() << ',' << v->z();
+    }
+    out_ << ',' << (d.forward_hold ? 1 : 0) << '\n';
+  }
+  /// Flushes and closes; "" or what failed.
+  std::string close() {
+    if (!out_.is_open()) return "";
+    out_.flush();
+    const bool good = static_cast<bool>(out_);
+    const int error_number = errno;
+    out_.close();
+    return good ? "" : path_ + ": write failed: " + std::strerror(error_number);
+  }
+
+ private:
+  std::string path_;
+  std::ofstream out_;
+};
+
+/// Closes every output file; prints (and logs) each one that failed. True when all are complete.
+bool close_outputs(TrajectoryWriter& trajectory, TrajectoryWriter* imu_rate, ScanLog& scan_log, std::ostream& out) {
+  std::vector<std::string> errors;
+  for (TrajectoryWriter* w : {&trajectory, imu_rate}) {
+    if (w != nullptr && !w->close()) errors.push_back(w->error() + " (the file is incomplete)");
+  }
+  if (const std::string e = scan_log.close(); !e.empty()) errors.push_back(e);
+  for (const auto& e : errors) {
+    out << "error: " << e << '\n';
+    spdlog::error("{}", e);
+  }
+  return errors.empty();
+}
+
+void print_summary(Pipeline& pipeline, const PcapLidarSource& pcap, double wall_s, std::ostream& out) {
+  const auto& t = pipeline.totals();
+  const auto& ps = pcap.stats();
+  const auto hs = pipeline.lidar_output().decoder_stats();
+  out << "replay: " << t.scans << " scans (" << t.processed << " with a pose, " << t.keyframes << " keyframes, "
+      << t.degenerate << " degenerate), " << t.imu_fed << " IMU samples (" << t.imu_dropped << " dropped)\n";
+  out << "packets: " << hs.msop << " MSOP, " << hs.difop << " DIFOP, " << hs.rejected() << " rejected, "
+      << ps.dropped() << " dropped by the pcap reader\n";
+  out << std::fixed << std::setprecision(2) << "front end per scan (deskew + features + registration): median "
+      << percentile(t.front_end_ms, 0.5) << " ms, p99 " << percentile(t.front_end_ms, 0.99) << " ms\n";
+  const double drive_s = t.scans > 0 ? static_cast<double>(t.scans) * 0.1 : 0.0;
+  out << "wall time " << wall_s << " s for " << drive_s << " s of data (" << (wall_s > 0 ? drive_s / wall_s : 0.0)
+      << "x real time)\n";
+}
+
 }  // namespace
 
 int run_replay(const Config& config, const ReplayOptions& options, std::ostream& out) {
@@ -63,16 +133,7 @@ int run_replay(const Config& config, const ReplayOptions& options, std::ostream&
   TrajectoryWriter trajectory(options.trajectory_tum);
   std::unique_ptr<TrajectoryWriter> imu_rate;
   if (!options.imu_rate_tum.empty()) imu_rate = std::make_unique<TrajectoryWriter>(options.imu_rate_tum);
-  std::ofstream scan_log;
-  if (!options.scan_log_csv.empty()) {
-    scan_log.open(options.scan_log_csv);
-    if (!scan_log) throw std::runtime_error(options.scan_log_csv + ": cannot open for writing");
-    scan_log << "time,status,points,edges,planes,residuals,iterations,rms_m,min_eigenvalue,hausdorff_m,"
-                "deskew_ms,features_ms,registration_ms,map_ms,"
-                "velocity_x,velocity_y,velocity_z,velocity_correction_x,velocity_correction_y,velocity_correction_z,"
-                "accel_bias_x,accel_bias_y,accel_bias_z,gyro_bias_x,gyro_bias_y,gyro_bias_z,"
-                "gravity_x,gravity_y,gravity_z,forward_hold\n";
-  }
+  ScanLog scan_log(options.scan_log_csv);
 
   PipelineOptions po;
   po.ordering = options.pace > 0.0 ? Ordering::Arrival : Ordering::Lockstep;
@@ -99,17 +160,7 @@ int run_replay(const Config& config, const ReplayOptions& options, std::ostream&
     } else {
       trajectory.write(m.time, m.position, m.orientation);
     }
-    if (scan_log) {
-      const auto& d = ev.diagnostics;
-      scan_log << std::fixed << std::setprecision(6) << m.time << ',' << d.status << ',' << d.points << ',' << d.edges
-               << ',' << d.planes << ',' << d.residuals << ',' << d.iterations << ',' << std::setprecision(4) << d.rms_m
-               << ',' << d.min_eigenvalue << ',' << d.hausdorff_m << ',' << d.deskew_ms << ',' << d.features_ms << ','
-               << d.registration_ms << ',' << d.map_ms << std::setprecision(6);
-      for (const Eigen::Vector3d* v : {&d.velocity_body, &d.velocity_correction_body, &d.accel_bias, &d.gyro_bias, &d.gravity_body}) {
-        scan_log << ',' << v->x() << ',' << v->y() << ',' << v->z();
-      }
-      scan_log << ',' << (d.forward_hold ? 1 : 0) << '\n';
-    }
+    scan_log.write(m.time, ev.diagnostics);
   });
   auto pcap_source = std::make_unique<PcapLidarSource>(options.pcap, ports, pace);
   PcapLidarSource* pcap = pcap_source.get();
@@ -127,31 +178,19 @@ int run_replay(const Config& config, const ReplayOptions& options, std::ostream&
   progress.finish();
   if (!pipeline.error().empty()) throw std::runtime_error(pipeline.error());
 
-  const auto& t = pipeline.totals();
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  const auto& ps = pcap->stats();
-  const auto hs = pipeline.lidar_output().decoder_stats();
   if (!pcap->read_error().empty()) spdlog::warn("{}: {}", options.pcap, pcap->read_error());
-  out << "replay: " << t.scans << " scans (" << t.processed << " with a pose, " << t.keyframes << " keyframes, "
-      << t.degenerate << " degenerate), " << t.imu_fed << " IMU samples (" << t.imu_dropped << " dropped)\n";
-  out << "packets: " << hs.msop << " MSOP, " << hs.difop << " DIFOP, " << hs.rejected() << " rejected, "
-      << ps.dropped() << " dropped by the pcap reader\n";
-  out << std::fixed << std::setprecision(2) << "front end per scan (deskew + features + registration): median "
-      << percentile(t.front_end_ms, 0.5) << " ms, p99 " << percentile(t.front_end_ms, 0.99) << " ms\n";
-  const double drive_s = t.scans > 0 ? static_cast<double>(t.scans) * 0.1 : 0.0;
-  out << "wall time " << wall_s << " s for " << drive_s << " s of data (" << (wall_s > 0 ? drive_s / wall_s : 0.0)
-      << "x real time)\n";
+  print_summary(pipeline, *pcap, std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count(), out);
   if (BackendWorker* backend = pipeline.backend()) {
     for (const auto& s : backend->backend().corrected_trajectory(scan_poses)) trajectory.write(s);
-    trajectory.flush();
     out << backend->summary();
   }
-  out << "trajectory: " << options.trajectory_tum << '\n';
-  if (t.processed == 0) {
+  const bool complete = close_outputs(trajectory, imu_rate.get(), scan_log, out);
+  out << "trajectory: " << options.trajectory_tum << (complete ? "" : " (incomplete)") << '\n';
+  if (pipeline.totals().processed == 0) {
     spdlog::error("no pose was estimated: check that the IMU log and the pcap cover the same time span");
     return 1;
   }
-  return 0;
+  return complete ? 0 : 1;
 }
 
 }  // namespace liod

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <ostream>
@@ -25,23 +26,39 @@ namespace liod {
 namespace {
 
 /// Writes what the drivers receive, off their threads: the taps only copy into SPSC rings (a
-/// full ring drops and counts, never stalls a driver), and this thread does the file I/O.
+/// full ring drops and counts, never stalls a driver), and this thread does the file I/O. A
+/// write that fails (a full disk) stops the recording only: logged, counted, and reported by
+/// failed() so that `liod record` exits non-zero; the daemon runs on.
 class Recorder {
  public:
   explicit Recorder(const std::filesystem::path& dir)
       : pcap_(dir / "lidar.pcap"), imu_(dir / "imu.csv"), packets_(8192, &wakeup_), samples_(8192, &wakeup_),
         thread_([this] { run(); }) {}
-  ~Recorder() {
+  ~Recorder() { finish(); }
+  Recorder(const Recorder&) = delete;
+  Recorder& operator=(const Recorder&) = delete;
+
+  /// Stops the writer thread, flushes the files and logs the totals; false when the recording
+  /// is incomplete (a write failed).
+  bool finish() {
+    if (finished_) return !failed();
+    finished_ = true;
     stop_.store(true);
     wakeup_.notify();
     thread_.join();
-    pcap_.flush();
-    imu_.flush();
-    spdlog::info("record: {} packets, {} IMU samples written; {} packets and {} samples dropped (disk too slow)",
-                 packets_written_, samples_written_, packets_.drops(), samples_.drops());
+    if (!failed()) guarded([this] {
+      pcap_.flush();
+      imu_.flush();
+    });
+    spdlog::log(failed() ? spdlog::level::err : spdlog::level::info,
+                "record: {} packets, {} IMU samples written; {} packets and {} samples dropped (disk too slow), {} "
+                "non-finite samples not written{}",
+                packets_written_, samples_written_, packets_.drops(), samples_.drops(), non_finite_samples_,
+                failed() ? "; recording stopped early: " + error_ : std::string());
+    return !failed();
   }
   void packet(std::span<const std::uint8_t> payload, std::int64_t time_ns, std::uint16_t dst_port) {
-    if (payload.size() > kMaxPayload) return;
+    if (payload.size() > kMaxPayload || failed_.load(std::memory_order_relaxed)) return;
     item_.time_ns = time_ns;
     item_.dst_port = dst_port;
     item_.length = static_cast<std::uint16_t>(payload.size());
@@ -49,9 +66,12 @@ class Recorder {
     packets_.try_push(item_);
   }
   void sample(const ImuSample& s) {
+    if (failed_.load(std::memory_order_relaxed)) return;
     ImuSample copy = s;
     samples_.try_push(copy);
   }
+  /// A write failed; the recording ended there.
+  bool failed() const noexcept { return failed_.load(); }
 
  private:
   static constexpr std::size_t kMaxPayload = 1500;
@@ -61,30 +81,52 @@ class Recorder {
     std::uint16_t length = 0;
     std::array<std::uint8_t, kMaxPayload> data{};
   };
-  void run() {
+  /// Runs a write; a failure ends the recording (the writers throw on any I/O error).
+  template <typename Write>
+  bool guarded(Write&& write) {
+    try {
+      write();
+      return true;
+    } catch (const std::exception& e) {
+      error_ = e.what();
+      failed_.store(true);
+      spdlog::error("record: {}; recording stopped (the daemon runs on)", error_);
+      return false;
+    }
+  }
+  bool write_pending() {
     Packet p;
     ImuSample s;
-    for (;;) {
-      bool any = false;
-      while (packets_.try_pop(p)) {
-        drivers::UdpDatagram d;
-        d.capture_time_ns = p.time_ns;
-        d.src_ip = 0xC0A801C8;  // 192.168.1.200, the sensor's factory address (the source is not kept)
-        d.dst_ip = 0xC0A80166;  // 192.168.1.102
-        d.src_port = p.dst_port;
-        d.dst_port = p.dst_port;
-        d.payload = std::span<const std::uint8_t>(p.data.data(), p.length);
-        pcap_.write(d);
-        ++packets_written_;
-        any = true;
+    bool any = false;
+    while (packets_.try_pop(p)) {
+      drivers::UdpDatagram d;
+      d.capture_time_ns = p.time_ns;
+      d.src_ip = 0xC0A801C8;  // 192.168.1.200, the sensor's factory address (the source is not kept)
+      d.dst_ip = 0xC0A80166;  // 192.168.1.102
+      d.src_port = p.dst_port;
+      d.dst_port = p.dst_port;
+      d.payload = std::span<const std::uint8_t>(p.data.data(), p.length);
+      if (!guarded([&] { pcap_.write(d); })) return false;
+      ++packets_written_;
+      any = true;
+    }
+    while (samples_.try_pop(s)) {
+      any = true;
+      // The IMU log's reader refuses NaN and infinity (as the odometry does): such a sample
+      // from a driver is left out, not a reason to stop recording.
+      if (!s.gyro.allFinite() || !s.accel.allFinite() || !std::isfinite(s.time)) {
+        ++non_finite_samples_;
+        continue;
       }
-      while (samples_.try_pop(s)) {
-        imu_.write(s);
-        ++samples_written_;
-        any = true;
-      }
-      if (!any) {
-        if (stop_.load()) return;
+      if (!guarded([&] { imu_.write(s); })) return false;
+      ++samples_written_;
+    }
+    return any;
+  }
+  void run() {
+    while (!failed()) {
+      if (!write_pending()) {
+        if (failed() || stop_.load()) return;
         wakeup_.wait(std::chrono::milliseconds(100));
       }
     }
@@ -96,7 +138,10 @@ class Recorder {
   drivers::SpscRing<ImuSample> samples_;
   Packet item_;
   std::atomic<bool> stop_{false};
-  std::uint64_t packets_written_ = 0, samples_written_ = 0;
+  std::atomic<bool> failed_{false};
+  bool finished_ = false;
+  std::string error_;  // written by the recorder thread before failed_, read after the join
+  std::uint64_t packets_written_ = 0, samples_written_ = 0, non_finite_samples_ = 0;
   std::thread thread_;
 };
 
@@ -131,6 +176,113 @@ class SignalFd {
   int fd_ = -1;
 };
 
+/// What `liod run`'s main loop does besides waiting for a signal, once per pass (100 ms): the
+/// PPS correction, host clock steps, systemd's watchdog and status, the health line in the log.
+class Supervisor {
+ public:
+  Supervisor(const Config& config, Pipeline& pipeline, std::unique_ptr<drivers::PpsDiscipline> pps)
+      : config_(config), pipeline_(pipeline), pps_(std::move(pps)),
+        jumps_(static_cast<std::int64_t>(config.time.jump_threshold_s * 1e9)) {
+    std::uint64_t watchdog_us = 0;
+    watchdog_ = ::sd_watchdog_enabled(0, &watchdog_us) > 0 && watchdog_us > 0;
+    ping_every_ = std::chrono::microseconds(watchdog_ ? watchdog_us / 2 : 1000000);
+    next_ping_ = next_stall_log_ = Clock::now();
+    next_health_ = Clock::now() + health_every();
+  }
+
+  void tick() {
+    if (pps_) pipeline_.imu_output().pps_correction_ns.store(pps_->correction_ns());
+    if (const auto step = jumps_.check(); step != 0) {
+      spdlog::warn("host clock jumped by {:.3f} s (CLOCK_REALTIME step); host-stamped times are kept continuous, poses "
+                   "flagged clock_jump for {} s",
+                   static_cast<double>(step) * 1e-9, config_.time.jump_flag_s);
+      pipeline_.note_host_clock_jump();
+    }
+    const auto now = Clock::now();
+    if (now >= next_ping_) watchdog(now);
+    if (config_.pose_socket.health_log_interval_s > 0 && now >= next_health_) {
+      next_health_ = now + health_every();
+      spdlog::info("health {}", pipeline_.health_json(rates_));
+      const std::string status = "STATUS=sweeps " + std::to_string(pipeline_.lidar_output().sweeps()) + ", IMU samples " +
+                                 std::to_string(pipeline_.imu_output().samples());
+      ::sd_notify(0, status.c_str());
+    }
+  }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  // A thread is stalled when it has not passed its loop for this long: every driver and worker
+  // loop waits at most 100 ms, and a scan takes tens of ms, so 2 s means stuck. The backend's
+  // one unit of work may take longer (threads.backend_work_limit_s, heartbeat.hpp).
+  static constexpr std::chrono::milliseconds kStallLimit{2000};
+
+  Clock::duration health_every() const {
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(config_.pose_socket.health_log_interval_s));
+  }
+
+  void watchdog(Clock::time_point now) {
+    const auto stalled = pipeline_.stalled(kStallLimit);
+    if (stalled.empty()) {
+      if (watchdog_) ::sd_notify(0, "WATCHDOG=1");
+      if (withheld_) spdlog::info("all threads progressing again; watchdog pings resumed");
+      withheld_ = false;
+      next_ping_ = now + ping_every_;
+      return;
+    }
+    // No ping: systemd's watchdog restarts us if this persists for WatchdogSec. Checked again
+    // at the next pass, so that the ping resumes the moment the thread does.
+    if (!withheld_ || now >= next_stall_log_) {
+      std::string names;
+      for (const auto& s : stalled) names += (names.empty() ? "" : ", ") + s;
+      spdlog::error("threads not progressing: {}; withholding the watchdog ping", names);
+      next_stall_log_ = now + ping_every_;
+    }
+    withheld_ = true;
+  }
+
+  const Config& config_;
+  Pipeline& pipeline_;
+  std::unique_ptr<drivers::PpsDiscipline> pps_;
+  drivers::ClockJumpDetector jumps_;
+  bool watchdog_ = false;
+  bool withheld_ = false;
+  Clock::duration ping_every_{};
+  Clock::time_point next_ping_, next_stall_log_, next_health_;
+  HealthRates rates_;
+};
+
+std::unique_ptr<drivers::PpsDiscipline> open_pps(const Config& config) {
+  if (config.time.pps_chip.empty()) return nullptr;
+  try {
+    return std::make_unique<drivers::PpsDiscipline>(config.time.pps_chip, config.time.pps_line);
+  } catch (const std::exception& e) {
+    spdlog::warn("{}; IMU stamps stay on the host clock", e.what());
+    return nullptr;
+  }
+}
+
+/// Waits for SIGTERM/SIGINT, a thread's error or the time limit; returns the exit code so far.
+int supervise(const SignalFd& signals, Pipeline& pipeline, Supervisor& supervisor, double max_seconds) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                               std::chrono::duration<double>(max_seconds));
+  for (;;) {
+    pollfd p{signals.fd(), POLLIN, 0};
+    ::poll(&p, 1, 100);
+    if ((p.revents & POLLIN) != 0) {
+      const int sig = signals.take();
+      if (sig == SIGHUP) {
+        spdlog::info("SIGHUP: configuration reload is not supported; restart the service to apply changes");
+        continue;
+      }
+      spdlog::info("signal {}: stopping", sig);
+      return 0;
+    }
+    if (!pipeline.error().empty()) return 1;
+    if (max_seconds > 0 && std::chrono::steady_clock::now() >= deadline) return 0;
+    supervisor.tick();
+  }
+}
+
 }  // namespace
 
 int run_daemon(const Config& config, const RunOptions& options) {
@@ -145,14 +297,6 @@ int run_daemon(const Config& config, const RunOptions& options) {
     throw std::runtime_error("pose socket directory " + socket_dir.string() +
                              " does not exist (systemd's RuntimeDirectory= creates /run/liod)");
   }
-  std::unique_ptr<drivers::PpsDiscipline> pps;
-  if (!config.time.pps_chip.empty()) {
-    try {
-      pps = std::make_unique<drivers::PpsDiscipline>(config.time.pps_chip, config.time.pps_line);
-    } catch (const std::exception& e) {
-      spdlog::warn("{}; IMU stamps stay on the host clock", e.what());
-    }
-  }
   PipelineOptions po;
   po.ordering = Ordering::Arrival;
   po.imu_rate_poses = config.pose_socket.imu_rate;
@@ -164,80 +308,20 @@ int run_daemon(const Config& config, const RunOptions& options) {
     pipeline.lidar_output().tap = [r](std::span<const std::uint8_t> p, std::int64_t t, std::uint16_t port) { r->packet(p, t, port); };
     pipeline.imu_output().tap = [r](const ImuSample& s) { r->sample(s); };
   }
+  Supervisor supervisor(config, pipeline, open_pps(config));
   auto lidar = make_live_lidar_source(config);
   auto imu = make_live_imu_source(config);
   spdlog::info("liod: LiDAR {}, IMU {}, poses on {}", lidar->describe(), imu ? imu->describe() : "none",
                config.output.pose_socket);
   pipeline.start(std::move(lidar), std::move(imu));
   ::sd_notify(0, "READY=1\nSTATUS=running");
-
-  std::uint64_t watchdog_us = 0;
-  const bool watchdog = ::sd_watchdog_enabled(0, &watchdog_us) > 0 && watchdog_us > 0;
-  const auto ping_every = std::chrono::microseconds(watchdog ? watchdog_us / 2 : 1000000);
-  // A thread is stalled when it has not passed its loop for this long: every driver and worker
-  // loop waits at most 100 ms, and a scan takes tens of ms, so 2 s means stuck.
-  const auto stall_limit = std::chrono::milliseconds(2000);
-  drivers::ClockJumpDetector jumps(static_cast<std::int64_t>(config.time.jump_threshold_s * 1e9));
-  auto next_ping = std::chrono::steady_clock::now();
-  auto next_log = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                          std::chrono::duration<double>(config.pose_socket.health_log_interval_s));
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                               std::chrono::duration<double>(options.max_seconds));
-  HealthRates rates;
-  int exit_code = 0;
-  for (;;) {
-    pollfd p{signals.fd(), POLLIN, 0};
-    ::poll(&p, 1, 100);
-    if ((p.revents & POLLIN) != 0) {
-      const int sig = signals.take();
-      if (sig == SIGHUP) {
-        spdlog::info("SIGHUP: configuration reload is not supported; restart the service to apply changes");
-        continue;
-      }
-      spdlog::info("signal {}: stopping", sig);
-      break;
-    }
-    if (!pipeline.error().empty()) {
-      exit_code = 1;
-      break;
-    }
-    if (options.max_seconds > 0 && std::chrono::steady_clock::now() >= deadline) break;
-    if (pps) pipeline.imu_output().pps_correction_ns.store(pps->correction_ns());
-    if (const auto step = jumps.check(); step != 0) {
-      spdlog::warn("host clock jumped by {:.3f} s (CLOCK_REALTIME step); host-stamped times are kept continuous, poses "
-                   "flagged clock_jump for {} s",
-                   static_cast<double>(step) * 1e-9, config.time.jump_flag_s);
-      pipeline.note_host_clock_jump();
-    }
-    const auto now = std::chrono::steady_clock::now();
-    if (now >= next_ping) {
-      next_ping = now + ping_every;
-      const auto stalled = pipeline.stalled(stall_limit);
-      if (stalled.empty()) {
-        if (watchdog) ::sd_notify(0, "WATCHDOG=1");
-      } else {
-        // No ping: systemd's watchdog restarts us if this persists for WatchdogSec.
-        std::string names;
-        for (const auto& s : stalled) names += (names.empty() ? "" : ", ") + s;
-        spdlog::error("threads not progressing: {}; withholding the watchdog ping", names);
-      }
-    }
-    if (config.pose_socket.health_log_interval_s > 0 && now >= next_log) {
-      next_log = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                           std::chrono::duration<double>(config.pose_socket.health_log_interval_s));
-      const std::string health = pipeline.health_json(rates);
-      spdlog::info("health {}", health);
-      const std::string status = "STATUS=sweeps " + std::to_string(pipeline.lidar_output().sweeps()) + ", IMU samples " +
-                                 std::to_string(pipeline.imu_output().samples());
-      ::sd_notify(0, status.c_str());
-    }
-  }
+  int exit_code = supervise(signals, pipeline, supervisor, options.max_seconds);
   ::sd_notify(0, "STOPPING=1");
   // Drain what the rings hold (bounded), then flush recordings: a stop loses no received data.
   const bool clean = pipeline.drain(std::chrono::milliseconds(3000));
   if (!clean) spdlog::warn("some threads did not drain within 3 s; stopped them");
-  recorder.reset();
-  if (!pipeline.error().empty()) exit_code = 1;
+  const bool recording_complete = !recorder || recorder->finish();
+  if (!pipeline.error().empty() || !recording_complete) exit_code = 1;
   spdlog::info("liod stopped ({} scans with a pose, {} keyframes to the backend)", pipeline.totals().processed,
                pipeline.keyframes_received());
   return exit_code;

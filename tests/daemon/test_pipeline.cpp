@@ -3,6 +3,7 @@
 // computes.
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -167,11 +168,14 @@ namespace {
 /// `pace`, poses on a socket in `dir`.
 class LiveDaemon {
  public:
+  /// `file_size_limit` > 0: the child's RLIMIT_FSIZE, with SIGXFSZ ignored (a write past it
+  /// fails with EFBIG, as on a full disk).
   LiveDaemon(const std::filesystem::path& drive, const std::string& name, double pace, int port_slot,
-             const std::string& record_dir = "")
+             const std::string& record_dir = "", rlim_t file_size_limit = 0)
       : dir(name), sock((dir / "pose.sock").string()),
         msop(static_cast<std::uint16_t>(30000 + static_cast<int>(::getpid() % 2500) * 8 + port_slot * 2)),
-        difop(static_cast<std::uint16_t>(msop + 1)), drive_(drive), record_dir_(record_dir) {
+        difop(static_cast<std::uint16_t>(msop + 1)), drive_(drive), record_dir_(record_dir),
+        file_size_limit_(file_size_limit) {
     std::ofstream cfg(config_file());
     cfg << "lidar: {msop_port: " << msop << ", difop_port: " << difop << "}\n"
         << "drivers:\n  lidar: {bind_address: 127.0.0.1}\n  imu: {transport: file, file: \"" << (drive / "imu.csv").string()
@@ -191,6 +195,7 @@ class LiveDaemon {
   LiveDaemon& operator=(const LiveDaemon&) = delete;
 
   std::filesystem::path config_file() const { return dir / "test.yaml"; }
+  pid_t pid() const { return child_; }
   /// Everything `load_config` needs to see what the daemon saw.
   std::vector<std::string> config_files() const {
     return {std::string(LIOD_SOURCE_DIR) + "/config/liod.yaml", (drive_ / "extrinsics.yaml").string(), config_file().string()};
@@ -205,6 +210,11 @@ class LiveDaemon {
     if (child_ < 0) return testing::AssertionFailure() << "fork failed";
     if (child_ == 0) {
       std::freopen((dir / "liod.log").c_str(), "w", stderr);
+      if (file_size_limit_ > 0) {
+        ::signal(SIGXFSZ, SIG_IGN);  // kept across exec
+        const rlimit limit{file_size_limit_, file_size_limit_};
+        ::setrlimit(RLIMIT_FSIZE, &limit);
+      }
       if (record_dir_.empty()) {
         ::execl(bin.c_str(), "liod", "run", "--config", files[0].c_str(), "--config", files[1].c_str(), "--config",
                 files[2].c_str(), "--max-seconds", "300", static_cast<char*>(nullptr));
@@ -252,14 +262,16 @@ class LiveDaemon {
     return sent;
   }
 
-  /// SIGTERM; succeeds when it exits 0 within 15 s.
-  testing::AssertionResult stop() {
+  /// SIGTERM; succeeds when it exits with `expected_exit` within 15 s.
+  testing::AssertionResult stop(int expected_exit = 0) {
     ::kill(child_, SIGTERM);
     int status = 0;
     const bool reaped = test::wait_for([&] { return ::waitpid(child_, &status, WNOHANG) == child_; }, std::chrono::milliseconds(15000));
     if (!reaped) return testing::AssertionFailure() << "did not stop on SIGTERM\n" << log();
     child_ = -1;
-    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return testing::AssertionFailure() << "exit status " << status << "\n" << log();
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != expected_exit) {
+      return testing::AssertionFailure() << "exit status " << status << "\n" << log();
+    }
     return testing::AssertionSuccess();
   }
 
@@ -273,6 +285,7 @@ class LiveDaemon {
  private:
   std::filesystem::path drive_;
   std::string record_dir_;
+  rlim_t file_size_limit_ = 0;
   pid_t child_ = -1;
 };
 
@@ -370,4 +383,31 @@ TEST(Record, RecordingReplaysToTheSourcePoses) {
   std::ostringstream out;
   ASSERT_EQ(run_replay(load_config(live.config_files()), o, out), 0) << out.str();
   EXPECT_EQ(slurp(rec / "scan.tum"), slurp(ref / "scan.tum"));
+}
+
+// The disk fills while `liod record` runs (RLIMIT_FSIZE: writes past 256 kB fail with EFBIG):
+// the recording stops there, counted and logged; the daemon publishes every pose as before and
+// exits non-zero, because a file it was asked for is incomplete.
+TEST(Record, AFullDiskStopsOnlyTheRecording) {
+  LIOD_REQUIRE_SIM_DRIVE(drive);
+  if (!std::filesystem::exists(test::binary_dir() / "bin" / "liod")) GTEST_SKIP() << "liod binary not built";
+  const std::size_t ref_scans = read_tum(reference_replay(*drive) / "scan.tum").size();
+  const test::ScratchDir rec("recording-full");
+  constexpr rlim_t kLimit = 256 * 1024;
+  LiveDaemon live(*drive, "record-full", 5.0, 3, (rec / "drive").string(), kLimit);
+  ASSERT_TRUE(live.start());
+  live.send_and_collect(5.0, ref_scans);
+  const bool alive = ::kill(live.pid(), 0) == 0;
+  ASSERT_TRUE(live.stop(1));
+  EXPECT_TRUE(alive);
+  EXPECT_EQ(live.scans.size(), ref_scans) << live.log();
+  const std::string log = live.log();
+  EXPECT_NE(log.find("File too large"), std::string::npos) << log;
+  // What was written before the limit is a readable capture.
+  EXPECT_LE(std::filesystem::file_size(rec / "drive" / "lidar.pcap"), kLimit);
+  drivers::PcapReader reader(rec / "drive" / "lidar.pcap");
+  drivers::UdpDatagram d;
+  std::size_t packets = 0;
+  while (reader.next(d)) ++packets;
+  EXPECT_GT(packets, 100U);
 }

@@ -40,7 +40,7 @@ class ImuBuffer {
 
   /// Where the IMU is silent within [from, to]: between consecutive samples more than max_gap
   /// apart, before the first sample when it begins more than max_gap after `from`, and after the
-  /// last sample when it ends more than max_gap before `to`. Needs a sample.
+  /// last sample when it ends more than max_gap before `to`; all of it without a sample.
   std::vector<TimeSpan> gaps(double from, double to, double max_gap) const;
 
  private:

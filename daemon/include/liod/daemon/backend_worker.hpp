@@ -8,6 +8,7 @@
 // optimisation: the correction is copied under a mutex only after a solve finished.
 
 #include <Eigen/Geometry>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -20,9 +21,15 @@ namespace liod {
 
 class StateWriter;
 
+struct BackendWorkerOptions {
+  /// Called on the backend thread before each keyframe's work (its loop search and solve):
+  /// tests make that work slow with it.
+  std::function<void(const Keyframe&)> before_work;
+};
+
 class BackendWorker {
  public:
-  explicit BackendWorker(const Config& config);
+  explicit BackendWorker(const Config& config, BackendWorkerOptions options = {});
   ~BackendWorker();
   BackendWorker(const BackendWorker&) = delete;
   BackendWorker& operator=(const BackendWorker&) = delete;
@@ -43,6 +50,7 @@ class BackendWorker {
   void save_state();
 
   Config config_;
+  BackendWorkerOptions options_;
   std::unique_ptr<StateWriter> writer_;
   Backend backend_;
   bool state_frozen_ = false;

@@ -30,6 +30,8 @@ struct ThreadsConfig {
   int imu_ring = 4096;
   int pose_ring = 4096;
   int keyframe_ring = 64;
+  double backend_max_lag_s = 5.0;      // live: a keyframe that waited longer for the backend is skipped (no loop check)
+  double backend_work_limit_s = 60.0;  // one keyframe's backend work running longer than this is a stall (watchdog)
 };
 
 struct PoseSocketConfig {
@@ -41,6 +43,9 @@ struct PoseSocketConfig {
   double imu_rate_horizon_s = 1.0;  // no IMU-rate pose more than this after the last scan update (data time)
   double health_interval_s = 1.0;   // health message period on the socket
   double health_log_interval_s = 10.0;  // health line period in the log
+  double max_speed_mps = 100.0;     // a faster state is implausible, not ok
+  double max_gyro_bias_rad_s = 0.1; // a larger gyro bias (any axis) is implausible, not ok
+  double max_accel_bias_m_s2 = 1.0; // a larger accelerometer bias (any axis) is implausible, not ok
 };
 
 /// Everything the daemon's own parts need.

@@ -22,7 +22,7 @@ struct ScanAnchor {
   NavState state;                 ///< at the scan's end time
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  ///< world frame, as the odometry uses it
   Eigen::Matrix<double, 6, 6> pose_covariance = Eigen::Matrix<double, 6, 6>::Zero();
-  std::uint32_t flags = 0;        ///< pose::Flag bits that IMU-rate poses inherit (degenerate, few features)
+  std::uint32_t flags = 0;        ///< pose::Flag bits that IMU-rate poses inherit (those that kept the scan pose from ok)
 };
 
 class ImuRatePropagator {

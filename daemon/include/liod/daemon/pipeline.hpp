@@ -39,9 +39,11 @@
 
 #include "liod/config.hpp"
 #include "liod/daemon/backend_worker.hpp"
+#include "liod/daemon/heartbeat.hpp"
 #include "liod/daemon/imu_rate_propagator.hpp"
 #include "liod/daemon/pose_protocol.hpp"
 #include "liod/daemon/sensor_outputs.hpp"
+#include "liod/daemon/state_gate.hpp"
 #include "liod/drivers/spsc_ring.hpp"
 #include "liod/lidar_inertial_odometry.hpp"
 #include "liod/types.hpp"
@@ -75,6 +77,7 @@ struct PoseEvent {
 struct KeyframeEvent {
   std::shared_ptr<const Keyframe> keyframe;
   StateCovariance covariance = StateCovariance::Zero();
+  std::int64_t queued_steady_ns = 0;  ///< when the odometry handed it to the backend
 };
 
 enum class Ordering { Arrival, Lockstep };
@@ -128,6 +131,8 @@ struct PipelineOptions {
   /// Live sources (Arrival ordering): take steps of the LiDAR's and the IMU's time out
   /// (drivers::ClockStepBridge). Not for file replays: they play a recording as it is.
   bool bridge_clock_steps = false;
+  /// Handed to the BackendWorker (tests: a slow backend).
+  BackendWorkerOptions backend;
 };
 
 /// Totals for the replay summary (valid after join()).
@@ -164,7 +169,9 @@ class Pipeline {
   /// algorithm's results (backend()) once the threads have been joined.
   BackendWorker* backend() { return backend_.get(); }
 
-  /// Thread names whose heartbeat is older than `max_age`; empty = healthy.
+  /// Thread names whose heartbeat is older than `max_age`, or (the backend) whose current unit
+  /// of work has run longer than threads.backend_work_limit_s (heartbeat.hpp); empty = healthy.
+  /// This is what `liod run` pings systemd's watchdog on.
   std::vector<std::string> stalled(std::chrono::milliseconds max_age) const;
   /// The health JSON (rates since the previous call by the same caller are not kept: counters).
   std::string health_json(HealthRates& rates) const;
@@ -188,8 +195,15 @@ class Pipeline {
   void lidar_thread(LidarSource& source);
   void imu_thread(ImuSource* source);
   void odometry_thread();
+  struct OdometryLoop;  // the odometry thread's state (pipeline.cpp)
+  void feed_imu(OdometryLoop& loop, const ImuItem& item);
+  void process_scan(OdometryLoop& loop, ScanItem& item);
+  bool lockstep_step(OdometryLoop& loop, bool& done);
+  bool arrival_step(OdometryLoop& loop, bool& done);
   void publisher_thread(PoseServer* server);
   void backend_thread();
+  /// One keyframe on the backend thread: its loop search, solve and state files, or shed.
+  void backend_unit(const KeyframeEvent& k);
   void apply_thread_config(const ThreadConfig& tc, const char* name);
   void fail(const std::string& what);
   void push_pose(PoseEvent& ev);
@@ -200,6 +214,8 @@ class Pipeline {
   bool make_imu_pose(const ImuItem& item, PoseEvent& ev);
   /// Live: the IMU thread's IMU-rate pose for each sample.
   void publish_imu_pose(const ImuItem& item);
+  /// pose::kImplausible when a scan's state fails the gate (state_gate.hpp), else 0; logs changes.
+  std::uint32_t gate_scan_state(const OdometryResult& result);
 
   Config config_;
   PipelineOptions options_;
@@ -223,7 +239,7 @@ class Pipeline {
   std::vector<std::thread> threads_;
   int thread_count_ = 0;
   std::atomic<int> finished_threads_{0};
-  std::atomic<std::int64_t> hb_odometry_{0}, hb_publisher_{0}, hb_backend_{0};
+  Heartbeat hb_odometry_, hb_publisher_, hb_backend_;
   std::atomic<bool> imu_done_{false};
   OdometryTotals totals_;
   std::atomic<std::uint64_t> scans_processed_{0}, backend_keyframes_{0}, host_jumps_{0}, odometry_imu_dropped_{0};
@@ -233,6 +249,11 @@ class Pipeline {
   LatencyStats scan_latency_, imu_latency_, scan_receive_, scan_wait_, scan_process_, scan_publish_;
   std::atomic<std::uint64_t> socket_clients_{0}, socket_skipped_{0}, socket_dropped_{0};
   std::atomic<std::uint64_t> imu_poses_withheld_{0};  // past pose_socket.imu_rate_horizon_s
+  StateLimits state_limits_;
+  bool scan_state_plausible_ = true;                  // odometry thread only
+  std::atomic<std::uint64_t> implausible_poses_{0};   // scan and IMU-rate poses flagged implausible
+  std::atomic<std::uint64_t> backend_shed_{0};        // keyframes the backend skipped, behind
+  std::uint64_t backend_shed_logged_ = 0;             // backend thread only
   mutable std::mutex error_mutex_;
   std::string error_;
 };

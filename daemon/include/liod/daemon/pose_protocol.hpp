@@ -55,6 +55,7 @@ enum Flag : std::uint32_t {
   kFewFeatures = 1U << 6,   ///< too few features for a reliable update
   kClockJump = 1U << 7,     ///< a clock stepped within time.jump_flag_s, or the LiDAR's clock jumped in this scan or disagrees with the host
   kImuInconsistent = 1U << 8,  ///< the scan's registration contradicted the IMU prediction far beyond its covariance
+  kImplausible = 1U << 9,   ///< the state failed the publishing gate (state_gate.hpp): not finite, too fast, absurd bias or covariance
 };
 
 struct PoseMessage {
