@@ -1,14 +1,13 @@
-# LIOD_FUZZ: the libFuzzer targets in fuzz/ (clang only). Every library they link is compiled with
-# coverage instrumentation and ASan + UBSan, so a fuzz run exercises and checks the very code the
-# daemon runs; -O1 and line tables keep the build quick and the stack traces readable.
+# LIOD_FUZZ: the libFuzzer targets in fuzz/ (clang only). They are built in the AddressSanitizer +
+# UBSan tree the tests run in (LIOD_SANITIZE=address;undefined), so one build of the libraries
+# serves the tests and the fuzzers, and every fuzz run checks the very code the daemon runs.
+# fuzz/CMakeLists.txt gives libFuzzer's coverage instrumentation to the libraries the targets link;
+# the rest of the tree, which only the tests run, goes without it.
 if(LIOD_FUZZ)
   if(NOT CMAKE_CXX_COMPILER_ID MATCHES "Clang")
     message(FATAL_ERROR "LIOD_FUZZ needs clang (libFuzzer): configure with -DCMAKE_CXX_COMPILER=clang++")
   endif()
-  if(LIOD_SANITIZE)
-    message(FATAL_ERROR "LIOD_FUZZ brings its own sanitizers: leave LIOD_SANITIZE empty")
+  if(NOT "address" IN_LIST LIOD_SANITIZE OR NOT "undefined" IN_LIST LIOD_SANITIZE)
+    message(FATAL_ERROR "LIOD_FUZZ builds in the sanitizer tree: configure with -DLIOD_SANITIZE='address;undefined'")
   endif()
-  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all
-                      -fno-omit-frame-pointer -O1 -gline-tables-only)
-  add_link_options(-fsanitize=address,undefined)
 endif()

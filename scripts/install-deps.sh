@@ -5,7 +5,7 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake pkg-config git
+  build-essential cmake ninja-build pkg-config git
   libeigen3-dev libceres-dev
   libspdlog-dev libfmt-dev libyaml-cpp-dev
   libgpiod-dev libsystemd-dev
