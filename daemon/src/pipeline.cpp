@@ -93,6 +93,7 @@ Pipeline::Pipeline(const Config& config, PipelineOptions options)
   lidar_out_ = std::make_unique<LidarOutput>(config_, scan_ring_, lossless, bridge, source_stop_);
   imu_out_ = std::make_unique<ImuOutput>(imu_ring_, lossless, source_stop_,
                                          bridge ? static_cast<std::int64_t>(config_.time.jump_threshold_s * 1e9) : 0);
+  imu_out_->range = {config_.imu.gyro_range_rad_s, config_.imu.accel_range_m_s2};
   if (!lossless && options_.imu_rate_poses) imu_out_->on_sample = [this](const ImuItem& item) { publish_imu_pose(item); };
   if (config_.backend.enabled) backend_ = std::make_unique<BackendWorker>(config_, options_.backend);
   state_limits_ = state_limits(config_);
@@ -629,7 +630,8 @@ std::string Pipeline::health_json(HealthRates& rates) const {
     << hs.rejected() << ",\"transport_lost\":" << lidar_out_->transport.lost.load() << ",\"transport_refused\":"
     << lidar_out_->transport.refused.load() << ",\"held_before_difop\":" << hs.held_for_calibration << ",\"clock_offset_s\":" << static_cast<double>(lidar_out_->clock_offset_ns()) * 1e-9
     << ",\"sensor_synced\":" << (lidar_out_->sensor_synced() ? "true" : "false") << ",\"clock_jumps\":"
-    << lidar_out_->clock_jumps() << "},\"time\":{\"host_clock_jumps\":" << host_jumps_.load()
+    << lidar_out_->clock_jumps() << ",\"truncated_sweeps\":" << hs.truncated_sweeps << ",\"calibration_changes\":"
+    << hs.calibration_changes << "},\"time\":{\"host_clock_jumps\":" << host_jumps_.load()
     << ",\"lidar_steps\":" << lidar_out_->clock_steps()
     << ",\"lidar_step_correction_s\":" << static_cast<double>(lidar_out_->step_correction_ns()) * 1e-9
     << ",\"imu_steps\":" << imu_out_->clock_steps()
@@ -637,6 +639,7 @@ std::string Pipeline::health_json(HealthRates& rates) const {
     << "},\"imu\":{\"samples\":" << imu << ",\"rate_hz\":" << rate(imu, rates.imu)
     << ",\"transport_lost\":" << imu_out_->transport.lost.load() << ",\"transport_refused\":"
     << imu_out_->transport.refused.load() << ",\"out_of_order\":" << imu_out_->out_of_order()
+    << ",\"saturated\":" << imu_out_->saturated() << ",\"out_of_range\":" << imu_out_->out_of_range()
     << ",\"odometry_dropped\":" << odometry_imu_dropped_.load() << ",\"pps_correction_s\":" << static_cast<double>(imu_out_->pps_correction_ns.load()) * 1e-9
     << "},\"odometry\":{\"scans\":" << scans << ",\"scan_rate_hz\":" << rate(scans, rates.scans)
     << ",\"last_process_ms\":" << last_process_ms_.load() << ",\"imu_poses_withheld\":" << imu_poses_withheld_.load()

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "liod/daemon/state_gate.hpp"
 #include "pipeline_run.hpp"
@@ -22,7 +23,9 @@ bool finite_message(const pose::PoseMessage& m) {
 }
 
 /// The drive with one IMU sample, `at_s` after the log's first, turned into `accel_x` m/s^2 (a
-/// serial frame that passed its checksum with garbage in it).
+/// serial frame that passed its checksum with garbage in it). The IMU's measurement range is set
+/// wider than any value, as for a unit whose range the configuration does not state: the range
+/// check that would drop the sample is then off, and the state gate is the last line.
 PipelineRun run_with_accel_spike(const std::filesystem::path& drive, double at_s, const std::string& accel_x) {
   const ScratchDir dir("spike");
   double first = -1.0;
@@ -37,7 +40,9 @@ PipelineRun run_with_accel_spike(const std::filesystem::path& drive, double at_s
     f[4] = accel_x;
     return f[0] + ',' + f[1] + ',' + f[2] + ',' + f[3] + ',' + f[4] + ',' + f[5] + ',' + f[6];
   });
-  return run_pipeline(drive_config(drive), drive / "lidar.pcap", dir / "imu.csv", 0.0);
+  Config config = drive_config(drive);
+  config.imu.accel_range_m_s2 = std::numeric_limits<double>::infinity();
+  return run_pipeline(config, drive / "lidar.pcap", dir / "imu.csv", 0.0);
 }
 
 struct GateFindings {
