@@ -91,8 +91,9 @@ bash scripts/fuzz.sh 10 build-asan
 # pipeline with IMU-rate poses made on the IMU thread).
 stage "TSan build"
 configure_tree tsan build-tsan
-cmake --build build-tsan -j"$jobs" --target test_daemon liod-sim  # liod-sim: the drive the pipeline tests use
+cmake --build build-tsan -j"$jobs" --target test_daemon
 stage "TSan tests"
 seed_test_times build-tsan
-(cd build-tsan && TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
+# The pipeline tests replay the drives the Release tests made (LIOD_TEST_DRIVES, as in the ASan tree).
+(cd build-tsan && export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" LIOD_TEST_DRIVES="$PWD/../build" &&
    ctest --output-on-failure -j"$jobs" -L test_daemon -R 'SpscRing|PoseSocket|PoseProtocol|StuckClient|UdpLidar|SerialImu|AnchorExchange|ClockJump')

@@ -1,4 +1,5 @@
 #include "liod/drivers/pcap_reader.hpp"
+#include "liod/drivers/c_file.hpp"
 
 #include <algorithm>
 #include <cinttypes>
@@ -25,10 +26,6 @@ constexpr std::uint32_t kNgEnhancedPacket = 6;
 // gigabytes. The limit holds whatever snaplen a classic file's header claims, as in Wireshark.
 constexpr std::uint32_t kMaxRecordBytes = 256 * 1024;
 constexpr std::uint32_t kMaxBlockBytes = kMaxRecordBytes + 4096;
-
-struct FileCloser {
-  void operator()(std::FILE* f) const noexcept { std::fclose(f); }
-};
 
 /// pcapng per-interface state (IDB): link type and timestamp units.
 struct NgInterface {
@@ -71,7 +68,7 @@ struct NgInterface {
 
 struct PcapReader::Impl {
   std::string path;
-  std::unique_ptr<std::FILE, FileCloser> file;
+  CFile file;
   CaptureFormat format = CaptureFormat::Pcap;
   bool big_endian = false;
   // classic pcap

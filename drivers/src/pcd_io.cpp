@@ -1,4 +1,5 @@
 #include "liod/drivers/pcd_io.hpp"
+#include "liod/drivers/c_file.hpp"
 
 #include <bit>
 #include <cerrno>
@@ -15,10 +16,6 @@
 
 namespace liod::drivers {
 namespace {
-
-struct FileCloser {
-  void operator()(std::FILE* f) const noexcept { std::fclose(f); }
-};
 
 constexpr std::size_t kPointRecordBytes = 5 * 4 + 2;
 
@@ -79,7 +76,7 @@ double decode_binary(const std::uint8_t* p, const FieldSpec& f) {
 
 void write_pcd_binary(const std::filesystem::path& path, const Scan& scan) {
   const std::string name = path.string();
-  std::unique_ptr<std::FILE, FileCloser> f(std::fopen(name.c_str(), "wb"));
+  CFile f(std::fopen(name.c_str(), "wb"));
   if (!f) throw InputError(name, 0, std::string("cannot create PCD file: ") + std::strerror(errno));
   const std::size_t n = scan.points.size();
   char header[768];

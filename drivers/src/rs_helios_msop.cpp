@@ -14,7 +14,6 @@ namespace {
 
 using namespace helios;
 
-constexpr std::int32_t kFullCircle = kAzimuthUnits;
 
 [[nodiscard]] bool has_msop_magic(const std::uint8_t* p) noexcept {
   return std::equal(kMsopMagic.begin(), kMsopMagic.end(), p);

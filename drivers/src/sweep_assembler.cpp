@@ -5,10 +5,13 @@
 #include <limits>
 #include <utility>
 
+#include "liod/drivers/rs_helios_model.hpp"
+
 namespace liod::drivers {
 namespace {
-constexpr std::int32_t kFullCircle = 36000;
-constexpr std::int32_t kMaxFiringStep = 100;  // 1°: larger steps are the blind zone or loss (§3)
+using helios::kFullCircle;
+// Consecutive blocks further apart than 1° straddle the blind zone or a loss (§3).
+using helios::kBlindZoneJump;
 }  // namespace
 
 SweepAssembler::SweepAssembler(SweepOptions options, Callback on_sweep)
@@ -132,7 +135,7 @@ void SweepAssembler::add_blocks(const PacketPoints& packet, std::size_t first, s
     } else {
       const Boundary ends = boundary(last_block_ns_, last_azimuth_, info_.blocks, block_ns, block.azimuth);
       const std::int32_t step = (block.azimuth - last_azimuth_ + kFullCircle) % kFullCircle;
-      if (ends != Boundary::Gap && step <= kMaxFiringStep) info_.azimuth_coverage_deg += step * 0.01;
+      if (ends != Boundary::Gap && step <= kBlindZoneJump) info_.azimuth_coverage_deg += step * 0.01;
       if (ends != Boundary::None) {
         info_.ended_by_gap = ends == Boundary::Gap;
         // A sweep that began at a cut holds what was left of the run that never crossed the split.

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <random>
 
+#include "liod/angles.hpp"
 #include "liod/backend/backend.hpp"
 #include "liod/backend/map_store.hpp"
 #include "synthetic_world.hpp"
@@ -18,8 +19,6 @@
 namespace {
 
 using namespace liod;
-constexpr double kDeg = M_PI / 180.0;
-
 test::World city_block() {
   test::World w;
   std::mt19937 rng(21);
@@ -46,7 +45,7 @@ Eigen::Isometry3d route(double s) {
   const int k = static_cast<int>(s / side);
   const double u = s - k * side;
   const double corners[4][2] = {{0, 0}, {side, 0}, {side, side}, {0, side}};
-  const double yaw = k * 90.0 * kDeg;
+  const double yaw = k * 90.0 * kDegToRad;
   Eigen::Isometry3d t = test::pose_xyz_yaw(corners[k][0], corners[k][1], 0.0, yaw);
   t.translation() += u * t.linear().col(0);
   return t;
@@ -71,7 +70,7 @@ TEST(Backend, ClosesTheLoopAroundABlockAndRemovesTheDrift) {
     } else {
       // A gyro bias: 0.04 deg of extra yaw per keyframe, plus noise.
       Eigen::Isometry3d step = truth[i - 1].inverse() * truth[i];
-      step.linear() = Eigen::AngleAxisd(0.04 * kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix() * step.linear();
+      step.linear() = Eigen::AngleAxisd(0.04 * kDegToRad, Eigen::Vector3d::UnitZ()).toRotationMatrix() * step.linear();
       step.translation() += Eigen::Vector3d(noise(rng), noise(rng), 0.3 * noise(rng));
       odometry.push_back(odometry.back() * step);
     }
@@ -120,7 +119,7 @@ TEST(Backend, ClosesTheLoopAroundABlockAndRemovesTheDrift) {
     const Eigen::Isometry3d true_relative = truth[check.candidate].inverse() * truth[check.current];
     const Eigen::Isometry3d error = true_relative.inverse() * solved;
     worst_loop_m = std::max(worst_loop_m, error.translation().norm());
-    worst_loop_deg = std::max(worst_loop_deg, Eigen::AngleAxisd(error.linear()).angle() / kDeg);
+    worst_loop_deg = std::max(worst_loop_deg, Eigen::AngleAxisd(error.linear()).angle() / kDegToRad);
   }
   std::printf("worst loop error after the solve: %.3f m, %.3f deg\n", worst_loop_m, worst_loop_deg);
   EXPECT_LT(worst_loop_m, 0.08);
@@ -176,7 +175,7 @@ TEST(Backend, SameLoopsAndPosesWithMostCloudsOnDisk) {
     const Eigen::Isometry3d truth = route(2.0 * i);
     if (i > 0) {
       Eigen::Isometry3d step = route(2.0 * (i - 1)).inverse() * truth;
-      step.linear() = Eigen::AngleAxisd(0.04 * kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix() * step.linear();
+      step.linear() = Eigen::AngleAxisd(0.04 * kDegToRad, Eigen::Vector3d::UnitZ()).toRotationMatrix() * step.linear();
       step.translation() += Eigen::Vector3d(noise(rng), noise(rng), 0.3 * noise(rng));
       odometry = odometry * step;
     }

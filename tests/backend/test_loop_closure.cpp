@@ -5,6 +5,7 @@
 
 #include <random>
 
+#include "liod/angles.hpp"
 #include "liod/backend/backend.hpp"
 #include "liod/backend/loop_closure.hpp"
 #include "synthetic_world.hpp"
@@ -13,8 +14,6 @@ namespace {
 
 using namespace liod;
 using liod::test::World;
-constexpr double kDeg = M_PI / 180.0;
-
 AlgorithmConfig test_config() {
   AlgorithmConfig c;
   c.backend.enabled = true;
@@ -129,8 +128,8 @@ TEST(LoopCheck, RevisitOfTheSameStreetCloses) {
   const World w = street(false);
   Scene s = street_a_submap(w);
   // Truly 3 m along street A, believed 1.2 m / 0.8 m / 1 deg off (drift).
-  const auto truth = liod::test::pose_xyz_yaw(3.0, 0.3, 0.0, 2.0 * kDeg);
-  const auto graph = liod::test::pose_xyz_yaw(4.2, -0.5, 0.15, 3.0 * kDeg);
+  const auto truth = liod::test::pose_xyz_yaw(3.0, 0.3, 0.0, 2.0 * kDegToRad);
+  const auto graph = liod::test::pose_xyz_yaw(4.2, -0.5, 0.15, 3.0 * kDegToRad);
   const std::size_t current = add_current(s, w, truth, graph);
   const LoopCheck check = check_loop(s.keyframes, s.poses, current, 5, test_config());
   ASSERT_EQ(check.outcome, LoopOutcome::kAccepted)
@@ -139,7 +138,7 @@ TEST(LoopCheck, RevisitOfTheSameStreetCloses) {
   EXPECT_LT(check.similarity_m, 1.0);
   const Eigen::Isometry3d expected = s.poses[5].inverse() * truth;
   EXPECT_LT((check.measured.translation() - expected.translation()).norm(), 0.05);
-  EXPECT_LT(Eigen::AngleAxisd(check.measured.linear().transpose() * expected.linear()).angle(), 0.2 * kDeg);
+  EXPECT_LT(Eigen::AngleAxisd(check.measured.linear().transpose() * expected.linear()).angle(), 0.2 * kDegToRad);
 }
 
 TEST(LoopCheck, ParallelStreetIsDissimilar) {
@@ -170,7 +169,7 @@ TEST(LoopCheck, VerticalCheckRejectsASlopedLookAlike) {
   }
   liod::test::add_box(deck, {Eigen::Vector3d(-5, -3, 0), Eigen::Vector3d(-2, 1, 1.5)}, 0.25);  // a parked van
   liod::test::add_box(deck, {Eigen::Vector3d(12, -8, 0), Eigen::Vector3d(12.3, 8, 2.5)}, 0.25);  // a cross wall
-  const Eigen::Isometry3d slope(Eigen::AngleAxisd(3.0 * kDeg, Eigen::Vector3d::UnitY()));
+  const Eigen::Isometry3d slope(Eigen::AngleAxisd(3.0 * kDegToRad, Eigen::Vector3d::UnitY()));
   World ramp;  // the deck's structure, tilted
   for (const auto& p : deck.planes) ramp.planes.push_back(slope * p);
   for (const auto& p : deck.edges) ramp.edges.push_back(slope * p);

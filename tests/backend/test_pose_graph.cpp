@@ -7,14 +7,15 @@
 #include <cmath>
 #include <random>
 
+#include "liod/angles.hpp"
 #include "liod/backend/pose_graph.hpp"
 
 namespace {
 
 using liod::PoseGraph;
+using liod::kDegToRad;
 using liod::PoseGraphFactor;
 
-constexpr double kDeg = M_PI / 180.0;
 constexpr int kPerSide = 20;      // 2 m steps on a 40 m square
 constexpr int kLap = 4 * kPerSide;
 
@@ -22,7 +23,7 @@ Eigen::Isometry3d square_pose(int i) {
   const int side = (i / kPerSide) % 4;
   const double s = 2.0 * (i % kPerSide);
   const double corners[4][2] = {{0, 0}, {40, 0}, {40, 40}, {0, 40}};
-  const double yaw = side * 90.0 * kDeg;
+  const double yaw = side * 90.0 * kDegToRad;
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   t.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   t.translation() = Eigen::Vector3d(corners[side][0], corners[side][1], 0.0) + s * t.linear().col(0);
@@ -39,12 +40,12 @@ Drive drive() {
   Drive d;
   std::mt19937 rng(3);
   std::normal_distribution<double> noise(0.0, 0.01);
-  std::normal_distribution<double> yaw_noise(0.0, 0.05 * kDeg);
+  std::normal_distribution<double> yaw_noise(0.0, 0.05 * kDegToRad);
   for (int i = 0; i < 2 * kLap; ++i) d.truth.push_back(square_pose(i));
   d.odometry.push_back(d.truth[0]);
   for (int i = 1; i < 2 * kLap; ++i) {
     Eigen::Isometry3d step = d.truth[i - 1].inverse() * d.truth[i];
-    step.linear() = Eigen::AngleAxisd(0.05 * kDeg + yaw_noise(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix() * step.linear();
+    step.linear() = Eigen::AngleAxisd(0.05 * kDegToRad + yaw_noise(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix() * step.linear();
     step.translation() += Eigen::Vector3d(noise(rng), noise(rng), 0.2 * noise(rng));
     d.odometry.push_back(d.odometry.back() * step);
   }
@@ -55,13 +56,13 @@ PoseGraph chain(const Drive& d) {
   PoseGraph g;
   for (std::size_t i = 0; i < d.odometry.size(); ++i) {
     g.add_node(d.odometry[i]);
-    g.set_tilt(i, d.truth[i].linear().transpose() * Eigen::Vector3d::UnitZ(), 0.5 * kDeg);
+    g.set_tilt(i, d.truth[i].linear().transpose() * Eigen::Vector3d::UnitZ(), 0.5 * kDegToRad);
     if (i == 0) continue;
     PoseGraphFactor f;
     f.from = i - 1;
     f.to = i;
     f.measured = d.odometry[i - 1].inverse() * d.odometry[i];
-    f.information = liod::relative_pose_information(0.05, 0.1 * kDeg);
+    f.information = liod::relative_pose_information(0.05, 0.1 * kDegToRad);
     g.add_factor(f);
   }
   return g;
@@ -72,7 +73,7 @@ PoseGraphFactor loop(const Drive& d, std::size_t a, std::size_t b) {
   f.from = a;
   f.to = b;
   f.measured = d.truth[a].inverse() * d.truth[b];
-  f.information = liod::relative_pose_information(0.1, 0.5 * kDeg);
+  f.information = liod::relative_pose_information(0.1, 0.5 * kDegToRad);
   f.loop = true;
   return f;
 }
@@ -176,7 +177,7 @@ TEST(PoseGraph, TiltFactorKeepsRollAndPitch) {
   g.optimize(liod::RobustLoss::kCauchy, 3.0, 100);
   for (std::size_t i = 0; i < d.truth.size(); ++i) {
     const Eigen::Vector3d up = g.pose(i).linear().transpose() * Eigen::Vector3d::UnitZ();
-    EXPECT_GT(up.z(), std::cos(0.5 * kDeg)) << i;
+    EXPECT_GT(up.z(), std::cos(0.5 * kDegToRad)) << i;
   }
 }
 

@@ -1,3 +1,5 @@
+#include "beam_direction.hpp"
+#include "liod/angles.hpp"
 #include "liod/beam_calibration.hpp"
 
 #include <gtest/gtest.h>
@@ -9,20 +11,14 @@
 namespace liod {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
-
-Eigen::Vector3d direction(double elevation, double azimuth) {
-  return {std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth), std::sin(elevation)};
-}
-
 TEST(BeamCalibration, ElevationDerivativeIsHowAPointMovesWithItsElevation) {
   const double range = 23.0;
-  const double elevation = -4.0 * kDeg;
+  const double elevation = -4.0 * kDegToRad;
   const double azimuth = 2.2;
   const double h = 1e-6;
   const Eigen::Vector3d numeric =
-      range * (direction(elevation + h, azimuth) - direction(elevation - h, azimuth)) / (2.0 * h);
-  const Eigen::Vector3d analytic = BeamCalibration::elevation_derivative(range * direction(elevation, azimuth));
+      range * (test::beam_direction(elevation + h, azimuth) - test::beam_direction(elevation - h, azimuth)) / (2.0 * h);
+  const Eigen::Vector3d analytic = BeamCalibration::elevation_derivative(range * test::beam_direction(elevation, azimuth));
   EXPECT_LT((numeric - analytic).norm(), 1e-6) << analytic.transpose() << " vs " << numeric.transpose();
   EXPECT_EQ(BeamCalibration::elevation_derivative(Eigen::Vector3d(0, 0, 5)), Eigen::Vector3d::Zero());
 }
@@ -38,19 +34,19 @@ TEST(BeamCalibration, LearnsEachBeamsOffsetFromItsGroundResidualsUpToTheHeightPa
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> error(-0.005, 0.005);
   std::vector<double> true_offset;
-  for (std::size_t k = 0; k + 1 < published_deg.size(); ++k) true_offset.push_back(error(rng) * kDeg);
-  true_offset.push_back(0.004 * kDeg);  // the upward beam never sees the ground
+  for (std::size_t k = 0; k + 1 < published_deg.size(); ++k) true_offset.push_back(error(rng) * kDegToRad);
+  true_offset.push_back(0.004 * kDegToRad);  // the upward beam never sees the ground
 
   BeamCalibration calibration(published_deg.size());
   for (int scan = 0; scan < 2000; ++scan) {
     for (std::size_t k = 0; k < published_deg.size(); ++k) {
       const auto beam = static_cast<std::uint16_t>(k);
-      const double published = published_deg[k] * kDeg;
+      const double published = published_deg[k] * kDegToRad;
       const double truth = published + true_offset[k];
       if (truth >= 0.0) continue;
       const double range = height / std::sin(-truth);
       for (int a = 0; a < 180; ++a) {
-        const Eigen::Vector3d point = calibration.correct(range * direction(published, a * 2.0 * kDeg), beam);
+        const Eigen::Vector3d point = calibration.correct(range * test::beam_direction(published, a * 2.0 * kDegToRad), beam);
         const double residual = point.z() + height;  // the ground plane z = -height, normal up
         const double jacobian = BeamCalibration::elevation_derivative(point).z();
         calibration.add_elevation(beam, std::atan2(point.z(), std::hypot(point.x(), point.y())), jacobian, residual,
@@ -72,7 +68,7 @@ TEST(BeamCalibration, LearnsEachBeamsOffsetFromItsGroundResidualsUpToTheHeightPa
   for (std::size_t k = 0; k + 1 < published_deg.size(); ++k) {
     const double expected = true_offset[k] - et / ee * published_deg[k];
     const double learned = calibration.offset_rad(static_cast<std::uint16_t>(k));
-    EXPECT_NEAR(learned / kDeg, expected / kDeg, 0.0005) << "beam " << k << " true " << true_offset[k] / kDeg;
+    EXPECT_NEAR(learned / kDegToRad, expected / kDegToRad, 0.0005) << "beam " << k << " true " << true_offset[k] / kDegToRad;
     spread_before += expected * expected;
     spread_after += (expected - learned) * (expected - learned);
   }
@@ -84,20 +80,20 @@ TEST(BeamCalibration, LearnsEachBeamsOffsetFromItsGroundResidualsUpToTheHeightPa
 TEST(BeamCalibration, AnOffsetFarBeyondARoundingErrorIsClampedAndBadResidualsIgnored) {
   BeamCalibration calibration(2);
   const double range = 20.0;
-  const double elevation = -5.0 * kDeg;
+  const double elevation = -5.0 * kDegToRad;
   for (int scan = 0; scan < 500; ++scan) {
     for (int a = 0; a < 100; ++a) {
-      const Eigen::Vector3d point = calibration.correct(range * direction(elevation, a * 0.06), 0);
+      const Eigen::Vector3d point = calibration.correct(range * test::beam_direction(elevation, a * 0.06), 0);
       const double jacobian = BeamCalibration::elevation_derivative(point).z();
       // Beam 0 reads 1 deg low (its ground 35 cm off at 20 m); beam 1 a steady 0 to keep the gauge fit defined.
-      calibration.add_elevation(0, elevation, jacobian, jacobian * (calibration.offset_rad(0) - 1.0 * kDeg), 0.03 * 0.03);
+      calibration.add_elevation(0, elevation, jacobian, jacobian * (calibration.offset_rad(0) - 1.0 * kDegToRad), 0.03 * 0.03);
       calibration.add_elevation(1, 2.0 * elevation, jacobian, 0.0, 0.03 * 0.03);
       calibration.add_elevation(0, elevation, std::nan(""), 1.0, 0.03 * 0.03);
       calibration.add_elevation(0, elevation, jacobian, 1.0, 0.0);
     }
     calibration.finish_scan();
   }
-  EXPECT_LE(std::abs(calibration.offset_rad(0)), 0.02 * kDeg + 1e-12);
+  EXPECT_LE(std::abs(calibration.offset_rad(0)), 0.02 * kDegToRad + 1e-12);
   EXPECT_GT(std::abs(calibration.offset_rad(0)), 0.0);
 }
 
@@ -124,7 +120,7 @@ TEST(BeamCalibration, LearnsEachBeamsRangeOffsetLessTheirMeanFromPlaneResiduals)
     for (std::size_t k = 0; k < elevation_deg.size(); ++k) {
       const auto beam = static_cast<std::uint16_t>(k);
       for (int a = 0; a < 90; ++a) {
-        const Eigen::Vector3d ray = direction(elevation_deg[k] * kDeg, (a * 4.0 + 0.3 * scan) * kDeg);
+        const Eigen::Vector3d ray = test::beam_direction(elevation_deg[k] * kDegToRad, (a * 4.0 + 0.3 * scan) * kDegToRad);
         // The nearest surface along the ray.
         double range = 1e9;
         const std::pair<Eigen::Vector3d, double>* hit = nullptr;

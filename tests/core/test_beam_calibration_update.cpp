@@ -1,3 +1,5 @@
+#include "beam_direction.hpp"
+#include "liod/angles.hpp"
 #include "liod/beam_calibration_update.hpp"
 
 #include <gtest/gtest.h>
@@ -10,8 +12,6 @@
 namespace liod {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
-
 // A car on flat ground (world z = 0), turned 40 deg, its level LiDAR 1.8 m above the ground
 // (1 m above the IMU, which rides 0.8 m up). The map is the ground as beams with their true
 // angles build it: a 0.3 m grid ahead of the car.
@@ -23,7 +23,7 @@ struct FlatGround {
 
   FlatGround() {
     state.position = Eigen::Vector3d(100.0, 20.0, 0.8);
-    state.rotation = so3::exp(Eigen::Vector3d(0.0, 0.0, 40.0 * kDeg));
+    state.rotation = so3::exp(Eigen::Vector3d(0.0, 0.0, 40.0 * kDegToRad));
     lidar_to_imu.translation = Eigen::Vector3d(0.5, 0.0, 1.0);
     std::vector<Eigen::Vector3d> ground;
     for (double x = 4.0; x < 56.0; x += 0.3) {
@@ -33,10 +33,6 @@ struct FlatGround {
   }
   Eigen::Vector3d to_world(const Eigen::Vector3d& lidar) const { return state.to_world(lidar_to_imu * lidar); }
 };
-
-Eigen::Vector3d direction(double elevation, double azimuth) {
-  return {std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth), std::sin(elevation)};
-}
 
 // One scan of the ground by beams at `published` elevations whose true elevations are
 // published + error: each return is the true range along the published direction, corrected by
@@ -48,8 +44,8 @@ DeskewedFeatures ground_scan(const FlatGround& g, const std::vector<double>& pub
     const auto ring = static_cast<std::uint16_t>(k);
     const double range = g.height / std::sin(-(published[k] + error[k]));
     for (int a = 0; a <= 240; ++a) {
-      const double azimuth = (-30.0 + 0.25 * a + 0.01 * (scan % 25)) * kDeg;
-      const Eigen::Vector3d lidar = calibration.correct(range * direction(published[k], azimuth), ring);
+      const double azimuth = (-30.0 + 0.25 * a + 0.01 * (scan % 25)) * kDegToRad;
+      const Eigen::Vector3d lidar = calibration.correct(range * test::beam_direction(published[k], azimuth), ring);
       f.map_planes.push_back(g.lidar_to_imu * lidar);
       f.map_plane_sources.push_back({ring, lidar});
     }
@@ -65,9 +61,9 @@ DeskewedFeatures ground_scan(const FlatGround& g, const std::vector<double>& pub
 // cannot tell from a height (the gauge the calibration removes), and its ring onto the ground.
 TEST(UpdateBeamCalibration, AFarBeamsElevationOffsetMovesTowardsTheTruth) {
   const FlatGround g;
-  const std::vector<double> published = {-15.0 * kDeg, -8.0 * kDeg, -6.0 * kDeg,
-                                         -4.0 * kDeg,  -3.0 * kDeg, -2.0 * kDeg};
-  const double delta = 0.01 * kDeg;
+  const std::vector<double> published = {-15.0 * kDegToRad, -8.0 * kDegToRad, -6.0 * kDegToRad,
+                                         -4.0 * kDegToRad,  -3.0 * kDegToRad, -2.0 * kDegToRad};
+  const double delta = 0.01 * kDegToRad;
   const std::vector<double> error = {delta, 0.0, 0.0, delta, 0.0, 0.0};
   CorrespondenceParams correspondence;
   correspondence.max_distance_m = 1.0;
@@ -102,7 +98,7 @@ TEST(UpdateBeamCalibration, AFarBeamsElevationOffsetMovesTowardsTheTruth) {
   EXPECT_LT(distance_to_expected[39], distance_to_expected[9]);
   EXPECT_LT(distance_to_expected.back(), distance_to_expected[39]);
   EXPECT_LT(distance_to_expected.back(), 0.1 * expected(3))
-      << "offset " << calibration.offset_rad(3) / kDeg << " deg, expected " << expected(3) / kDeg;
+      << "offset " << calibration.offset_rad(3) / kDegToRad << " deg, expected " << expected(3) / kDegToRad;
   for (std::size_t k = 1; k < published.size(); ++k) {
     EXPECT_NEAR(calibration.offset_rad(static_cast<std::uint16_t>(k)), expected(k), 0.1 * delta) << "beam " << k;
   }
@@ -113,8 +109,8 @@ TEST(UpdateBeamCalibration, AFarBeamsElevationOffsetMovesTowardsTheTruth) {
 // A scan that sees nothing the map has (a map of another place) teaches no beam anything.
 TEST(UpdateBeamCalibration, NoMapNoCorrection) {
   const FlatGround g;
-  const std::vector<double> published = {-8.0 * kDeg, -4.0 * kDeg};
-  const std::vector<double> error = {0.0, 0.01 * kDeg};
+  const std::vector<double> published = {-8.0 * kDegToRad, -4.0 * kDegToRad};
+  const std::vector<double> error = {0.0, 0.01 * kDegToRad};
   LocalMap elsewhere(1.0, 20, 0.2);
   elsewhere.add({Eigen::Vector3d(-500.0, 0.0, 0.0), Eigen::Vector3d(-500.0, 0.5, 0.0)}, 0);
   BeamCalibration calibration(published.size());

@@ -1,3 +1,4 @@
+#include "liod/angles.hpp"
 #include "liod/bias_holds.hpp"
 
 #include <gtest/gtest.h>
@@ -9,8 +10,6 @@
 
 namespace liod {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 // A covariance with every state correlated with every other.
 StateCovariance random_covariance(unsigned seed) {
@@ -43,7 +42,7 @@ StateVector position_update(const StateCovariance& p, const Eigen::Vector3d& res
 // lateral bias, not held, keeps its correlations.
 TEST(HoldForwardAcceleration, CutsTheForwardBiasAndAlongTrackTiltFromThePoseAndVelocity) {
   NavState x;
-  x.rotation = so3::exp(Eigen::Vector3d(0, 0, 30.0 * kDeg)) * so3::exp(Eigen::Vector3d(0, 2.0 * kDeg, 0));
+  x.rotation = so3::exp(Eigen::Vector3d(0, 0, 30.0 * kDegToRad)) * so3::exp(Eigen::Vector3d(0, 2.0 * kDegToRad, 0));
   x.gravity = so3::exp(Eigen::Vector3d(0.01, -0.005, 0)) * Eigen::Vector3d(0, 0, -9.80665);
   const Eigen::Vector3d forward(1.0, 0.0, 0.0);
   const StateCovariance p = random_covariance(1);
@@ -139,7 +138,7 @@ TEST(TurningFasterThan, OnlyWhenBothThePredictionAndTheUpdateTurnAboutTheVertica
   start.rotation = so3::exp(Eigen::Vector3d(0, 0, 0.3));
   auto yawed = [&](double deg) {
     NavState s = start;
-    s.rotation = start.rotation * so3::exp(Eigen::Vector3d(0, 0, deg * kDeg));
+    s.rotation = start.rotation * so3::exp(Eigen::Vector3d(0, 0, deg * kDegToRad));
     return s;
   };
   EXPECT_TRUE(turning_faster_than(start, yawed(1.0), yawed(1.0), 0.1, 5.0));
@@ -150,7 +149,7 @@ TEST(TurningFasterThan, OnlyWhenBothThePredictionAndTheUpdateTurnAboutTheVertica
   EXPECT_FALSE(turning_faster_than(start, yawed(1.0), yawed(1.0), 0.1, 0.0)) << "threshold 0: never";
   EXPECT_FALSE(turning_faster_than(start, yawed(1.0), yawed(1.0), 0.0, 5.0)) << "no duration";
   NavState rolled = start;
-  rolled.rotation = start.rotation * so3::exp(Eigen::Vector3d(2.0 * kDeg, 0, 0));
+  rolled.rotation = start.rotation * so3::exp(Eigen::Vector3d(2.0 * kDegToRad, 0, 0));
   EXPECT_FALSE(turning_faster_than(start, rolled, rolled, 0.1, 5.0)) << "a roll is no turn";
 }
 

@@ -1,3 +1,4 @@
+#include "liod/angles.hpp"
 #include "liod/deskew.hpp"
 
 #include <gtest/gtest.h>
@@ -11,8 +12,6 @@
 
 namespace liod {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 double rotation_error(const Eigen::Quaterniond& a, const Eigen::Matrix3d& b) {
   return so3::log(a.toRotationMatrix().transpose() * b).norm();
@@ -104,7 +103,7 @@ struct WallScan {
 
 WallScan wall_scan() {
   WallScan w;
-  w.lidar_to_imu.rotation = Eigen::Quaterniond(so3::exp(Eigen::Vector3d(1.0 * kDeg, -2.0 * kDeg, 3.0 * kDeg)));
+  w.lidar_to_imu.rotation = Eigen::Quaterniond(so3::exp(Eigen::Vector3d(1.0 * kDegToRad, -2.0 * kDegToRad, 3.0 * kDegToRad)));
   w.lidar_to_imu.translation = Eigen::Vector3d(0.8, 0.1, 1.4);
   const Pose imu_to_lidar = w.lidar_to_imu.inverse();
   auto add_point = [&](const Eigen::Vector3d& world, double time, std::uint16_t ring, const Eigen::Vector3d& shift) {
@@ -185,21 +184,21 @@ TEST(DeskewFeatures, AppliesTheBeamCalibrationsCorrection) {
   for (int scan = 0; scan < 300; ++scan) {
     for (int a = 0; a < 100; ++a) {
       const double j = 20.0;
-      calibration.add_elevation(0, -5.0 * kDeg, j, j * (calibration.offset_rad(0) - 1.0 * kDeg), 0.03 * 0.03);
-      calibration.add_elevation(1, -10.0 * kDeg, j, 0.0, 0.03 * 0.03);
+      calibration.add_elevation(0, -5.0 * kDegToRad, j, j * (calibration.offset_rad(0) - 1.0 * kDegToRad), 0.03 * 0.03);
+      calibration.add_elevation(1, -10.0 * kDegToRad, j, 0.0, 0.03 * 0.03);
     }
     calibration.finish_scan();
   }
   const double offset = calibration.offset_rad(0);
-  ASSERT_GT(std::abs(offset), 0.01 * kDeg);
+  ASSERT_GT(std::abs(offset), 0.01 * kDegToRad);
 
   const double height = 1.8;
-  const double truth = -5.0 * kDeg;
+  const double truth = -5.0 * kDegToRad;
   const double range = height / std::sin(-truth);
   Scan scan;
   ScanFeatures features;
   for (int a = 0; a < 90; ++a) {
-    const double azimuth = (a * 4.0 - 180.0) * kDeg;
+    const double azimuth = (a * 4.0 - 180.0) * kDegToRad;
     const double published = truth - offset;
     LidarPoint p;
     p.x = static_cast<float>(range * std::cos(published) * std::cos(azimuth));

@@ -1,3 +1,4 @@
+#include "liod/angles.hpp"
 #include "liod/keyframe_window.hpp"
 
 #include <gtest/gtest.h>
@@ -9,8 +10,6 @@
 
 namespace liod {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 // A stretch of road around (x0, 0, 0): ground 0.5 m apart over 8 x 8 m and a wall at y = 4.
 // Coordinates sit at quarter metres, off the 1 m voxels' faces, so that downsampling keeps the
@@ -29,7 +28,7 @@ std::vector<Eigen::Vector3d> road(double x0) {
 NavState pose(const Eigen::Vector3d& position, double yaw_deg = 0.0) {
   NavState s;
   s.position = position;
-  s.rotation = so3::exp(Eigen::Vector3d(0, 0, yaw_deg * kDeg));
+  s.rotation = so3::exp(Eigen::Vector3d(0, 0, yaw_deg * kDegToRad));
   return s;
 }
 

@@ -2,11 +2,13 @@
 
 #include <cmath>
 
+#include "liod/angles.hpp"
 #include "liod/so3.hpp"
 
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
+using liod::kDegToRad;
+
 const Eigen::Vector3d kUp = Eigen::Vector3d::UnitZ();
 
 // A body pitched, rolled and headed arbitrarily, as an IMU mounted on a vehicle on a slope.
@@ -15,9 +17,9 @@ Eigen::Matrix3d mounted_body() { return liod::so3::exp(Eigen::Vector3d(0.08, -0.
 TEST(So3, TurnRateAboutTheVerticalIsTheYawRateWhateverTheBodysTilt) {
   const Eigen::Matrix3d from = mounted_body();
   for (const double rate_deg_s : {-15.0, -3.0, 0.5, 12.0}) {
-    const Eigen::Matrix3d to = liod::so3::exp(kUp * rate_deg_s * kDeg * 0.1) * from;  // turned in the world
-    EXPECT_NEAR(liod::so3::turn_rate_about(from, to, kUp, 0.1), rate_deg_s * kDeg, 1e-12);
-    EXPECT_NEAR(liod::so3::turn_rate_about(from, to, -kUp, 0.1), -rate_deg_s * kDeg, 1e-12);
+    const Eigen::Matrix3d to = liod::so3::exp(kUp * rate_deg_s * kDegToRad * 0.1) * from;  // turned in the world
+    EXPECT_NEAR(liod::so3::turn_rate_about(from, to, kUp, 0.1), rate_deg_s * kDegToRad, 1e-12);
+    EXPECT_NEAR(liod::so3::turn_rate_about(from, to, -kUp, 0.1), -rate_deg_s * kDegToRad, 1e-12);
   }
 }
 

@@ -15,7 +15,6 @@ namespace {
 
 using test::SyntheticBlock;
 
-constexpr double kT = 55.56e-6;
 constexpr double kRangeM = 2.0;
 
 /// Elevations of table A (-16..15 deg) and table B (each half a degree higher): the same ring order.
@@ -35,7 +34,7 @@ std::vector<std::uint8_t> packet(std::size_t i) {
     blocks[k].azimuth = static_cast<std::uint16_t>((9000 + 20 * (12 * i + k)) % 36000);
     blocks[k].raw_distance.fill(static_cast<std::uint16_t>(kRangeM / 0.0025));
   }
-  const auto t_us = static_cast<std::int64_t>(std::llround(1.7e15 + static_cast<double>(i) * 12 * kT * 1e6));
+  const auto t_us = static_cast<std::int64_t>(std::llround(1.7e15 + static_cast<double>(i) * 12 * helios::kBlockPeriodS * 1e6));
   return test::make_msop(t_us, static_cast<std::uint32_t>(i), blocks);
 }
 

@@ -13,7 +13,6 @@ namespace {
 
 using test::SyntheticBlock;
 
-constexpr double kT = 55.56e-6;
 
 /// A 10 Hz single-return 5515 stream: packet i covers blocks 12i..12i+11 from `start_az`.
 class Stream {
@@ -26,7 +25,7 @@ class Stream {
       blocks[k].raw_distance.fill(800);  // 2 m
       blocks[k].intensity.fill(9);
     }
-    const auto t_us = static_cast<std::int64_t>(std::llround(1.7e15 + static_cast<double>(i) * 12 * kT * 1e6));
+    const auto t_us = static_cast<std::int64_t>(std::llround(1.7e15 + static_cast<double>(i) * 12 * helios::kBlockPeriodS * 1e6));
     return test::make_msop(t_us, static_cast<std::uint32_t>(1000 + i), blocks);
   }
 
@@ -76,8 +75,8 @@ TEST(SweepAssembly, SplitsAtZeroAcrossTheWrap) {
     EXPECT_EQ(c.scans[i].sequence, i);
     EXPECT_EQ(c.scans[i].beam_count, 32);
     // 1800 blocks: the last block starts 1799 × 55.56 µs after the first, plus its last firing.
-    EXPECT_NEAR(c.scans[i].end_time - c.scans[i].start_time, 1799 * kT + 45.15e-6, 2e-6);
-    EXPECT_NEAR(c.scans[i].start_time - c.scans[i - 1].start_time, i == 1 ? 1350 * kT : 1800 * kT, 2e-6);
+    EXPECT_NEAR(c.scans[i].end_time - c.scans[i].start_time, 1799 * helios::kBlockPeriodS + 45.15e-6, 2e-6);
+    EXPECT_NEAR(c.scans[i].start_time - c.scans[i - 1].start_time, i == 1 ? 1350 * helios::kBlockPeriodS : 1800 * helios::kBlockPeriodS, 2e-6);
   }
   // Rings are the elevation ranks; all 32 present.
   std::set<std::uint16_t> rings;
@@ -167,7 +166,7 @@ TEST(SweepAssembly, LateAndRepeatedPacketsJoinTheirSweepInTimeOrder) {
   for (const LidarPoint& p : c.scans[0].points) ring_times[p.ring].push_back(p.time);
   for (const auto& times : ring_times) {
     ASSERT_EQ(times.size(), 149U * 12U);
-    for (std::size_t k = 1; k < times.size(); ++k) ASSERT_NEAR(times[k] - times[k - 1], kT, 1e-6) << k;
+    for (std::size_t k = 1; k < times.size(); ++k) ASSERT_NEAR(times[k] - times[k - 1], helios::kBlockPeriodS, 1e-6) << k;
   }
 }
 
@@ -195,7 +194,7 @@ std::vector<std::uint8_t> stuck_packet(std::size_t i, std::uint16_t azimuth) {
     b.raw_distance.fill(800);
     b.intensity.fill(9);
   }
-  const auto t_us = static_cast<std::int64_t>(std::llround(1.7e15 + static_cast<double>(i) * 12 * kT * 1e6));
+  const auto t_us = static_cast<std::int64_t>(std::llround(1.7e15 + static_cast<double>(i) * 12 * helios::kBlockPeriodS * 1e6));
   return test::make_msop(t_us, static_cast<std::uint32_t>(i), blocks);
 }
 
@@ -239,7 +238,7 @@ TEST(SweepAssembly, AfterAStuckRunTheFirstSweepFromTheSplitIsWhole) {
   const Stream turning(10000);
   for (std::size_t k = 0; k < 150 * 3; ++k, ++i) {
     auto p = turning.packet(k);
-    const auto t_us = static_cast<std::int64_t>(std::llround(1.7e15 + static_cast<double>(i) * 12 * kT * 1e6));
+    const auto t_us = static_cast<std::int64_t>(std::llround(1.7e15 + static_cast<double>(i) * 12 * helios::kBlockPeriodS * 1e6));
     store_be48(p.data() + 20, static_cast<std::uint64_t>(t_us / 1'000'000));
     store_be32(p.data() + 26, static_cast<std::uint32_t>(t_us % 1'000'000));
     dec.feed(p);
@@ -266,7 +265,7 @@ TEST(SweepAssembly, ARevolutionAtTheSlowestRateInDualReturnIsNotCut) {
       blocks[k].azimuth = static_cast<std::uint16_t>((10 * (6 * i + k / 2)) % 36000);
       blocks[k].raw_distance.fill(800);
     }
-    const auto t_us = static_cast<std::int64_t>(std::llround(1.7e15 + static_cast<double>(i) * 6 * kT * 1e6));
+    const auto t_us = static_cast<std::int64_t>(std::llround(1.7e15 + static_cast<double>(i) * 6 * helios::kBlockPeriodS * 1e6));
     dec.feed(test::make_msop(t_us, static_cast<std::uint32_t>(i), blocks));
   }
   ASSERT_EQ(infos.size(), 3U);
@@ -289,7 +288,7 @@ TEST(SweepAssembly, ArrivalTimeStampsReplaceTheSensorClock) {
   dec.flush();
   ASSERT_EQ(scans.size(), 1U);
   // §3: arrival minus one packet duration (12 × 55.56 µs) is block 0's time.
-  EXPECT_NEAR(scans[0].start_time, 5.0 - 12 * kT, 1e-7);
+  EXPECT_NEAR(scans[0].start_time, 5.0 - 12 * helios::kBlockPeriodS, 1e-7);
 }
 
 }  // namespace

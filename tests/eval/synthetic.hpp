@@ -19,6 +19,13 @@ inline Eigen::Isometry3d pose(double x, double y, double z, double yaw = 0.0) {
   return p;
 }
 
+/// n poses 1 m apart along x.
+inline Poses line(std::size_t n) {
+  Poses p;
+  for (std::size_t i = 0; i < n; ++i) p.push_back(pose(static_cast<double>(i), 0, 0));
+  return p;
+}
+
 /// Stamps t0, t0 + dt, ...
 inline Trajectory stamped(const Poses& poses, double t0, double dt, const std::string& name = "traj") {
   Trajectory t;

@@ -7,15 +7,9 @@
 namespace liod::eval {
 namespace {
 
-Poses line(std::size_t n) {
-  Poses p;
-  for (std::size_t i = 0; i < n; ++i) p.push_back(test::pose(static_cast<double>(i), 0, 0));
-  return p;
-}
-
 TEST(Association, NearestAcceptsOffsetsWithinMaxDt) {
-  const Trajectory gt = test::stamped(line(50), 0.0, 0.1, "gt");
-  const Trajectory est = test::stamped(line(50), 0.015, 0.1, "est");
+  const Trajectory gt = test::stamped(test::line(50), 0.0, 0.1, "gt");
+  const Trajectory est = test::stamped(test::line(50), 0.015, 0.1, "est");
   AssociationOptions o;
   o.max_dt = 0.02;
   o.interpolation = Interpolation::Off;
@@ -29,8 +23,8 @@ TEST(Association, NearestAcceptsOffsetsWithinMaxDt) {
 }
 
 TEST(Association, OffsetBeyondMaxDtIsNoOverlapUnlessCorrected) {
-  const Trajectory gt = test::stamped(line(50), 0.0, 0.1, "gt");
-  const Trajectory est = test::stamped(line(50), 0.03, 0.1, "est");
+  const Trajectory gt = test::stamped(test::line(50), 0.0, 0.1, "gt");
+  const Trajectory est = test::stamped(test::line(50), 0.03, 0.1, "est");
   AssociationOptions o;
   o.interpolation = Interpolation::Off;
   try {
@@ -44,8 +38,8 @@ TEST(Association, OffsetBeyondMaxDtIsNoOverlapUnlessCorrected) {
 }
 
 TEST(Association, DisjointTimeRangesAreAnError) {
-  const Trajectory gt = test::stamped(line(10), 0.0, 0.1, "gt");
-  const Trajectory est = test::stamped(line(10), 100.0, 0.1, "est");
+  const Trajectory gt = test::stamped(test::line(10), 0.0, 0.1, "gt");
+  const Trajectory est = test::stamped(test::line(10), 100.0, 0.1, "est");
   EXPECT_THROW(associate(gt, est, {}), InputError);
 }
 
@@ -59,7 +53,7 @@ TEST(Association, GapsInGroundTruthLeaveEstimatesUnpaired) {
     gt.stamps.push_back(t);
     gt.poses.push_back(test::pose(t, 0, 0));
   }
-  const Trajectory est = test::stamped(line(31), 0.0, 0.1, "est");
+  const Trajectory est = test::stamped(test::line(31), 0.0, 0.1, "est");
   AssociationOptions o;
   o.interpolation = Interpolation::Off;
   EXPECT_EQ(associate(gt, est, o).est.size(), 31U - 9U);
@@ -123,24 +117,24 @@ TEST(Association, InterpolatesDenseGroundTruthExactly) {
 }
 
 TEST(Association, AutoUsesNearestForEqualRates) {
-  const Trajectory gt = test::stamped(line(20), 0.0, 0.1, "gt");
-  const Trajectory est = test::stamped(line(20), 0.0, 0.1, "est");
+  const Trajectory gt = test::stamped(test::line(20), 0.0, 0.1, "gt");
+  const Trajectory est = test::stamped(test::line(20), 0.0, 0.1, "est");
   EXPECT_FALSE(associate(gt, est, {}).interpolated);
 }
 
 TEST(Association, KittiPairsByIndexAndNeedsEqualLengths) {
   Trajectory gt;
   gt.name = "gt";
-  gt.poses = line(5);
+  gt.poses = test::line(5);
   Trajectory est;
   est.name = "est";
-  est.poses = line(5);
+  est.poses = test::line(5);
   const Association a = associate(gt, est, {});
   EXPECT_FALSE(a.by_time);
   EXPECT_EQ(a.est.size(), 5U);
   est.poses.pop_back();
   EXPECT_THROW(associate(gt, est, {}), InputError);
-  const Trajectory stamped = test::stamped(line(5), 0, 1, "tum");
+  const Trajectory stamped = test::stamped(test::line(5), 0, 1, "tum");
   EXPECT_THROW(associate(stamped, est, {}), InputError);
 }
 

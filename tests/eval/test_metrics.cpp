@@ -12,12 +12,6 @@ namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-Poses line(std::size_t n) {
-  Poses p;
-  for (std::size_t i = 0; i < n; ++i) p.push_back(test::pose(static_cast<double>(i), 0, 0));
-  return p;
-}
-
 std::vector<double> seconds(std::size_t n, double dt) {
   std::vector<double> s;
   for (std::size_t i = 0; i < n; ++i) s.push_back(dt * static_cast<double>(i));
@@ -39,7 +33,7 @@ TEST(Stats, MatchesNumpyConventions) {
 
 TEST(Rpe, OnePerturbedPositionGivesTwoKnownErrors) {
   // Pose 2 of 5 is 0.1 m off sideways: the pairs (1,2) and (2,3) each see 0.1 m, the others 0.
-  const Poses gt = line(5);
+  const Poses gt = test::line(5);
   Poses est = gt;
   est[2].translation().y() += 0.1;
   const auto r = compute_rpe(seconds(5, 1.0), gt, est, {1.0, DeltaUnit::Frames});
@@ -57,7 +51,7 @@ TEST(Rpe, OnePerturbedHeadingFollowsEvosDefinition) {
   // Pose 2 yawed by 2 deg in place. E = (Q_i^-1 Q_j)^-1 (P_i^-1 P_j):
   //  (1,2): rotation 2 deg, translation 0;
   //  (2,3): rotation 2 deg, translation |Rz(-2deg)(1,0,0) - (1,0,0)| = 2 sin(1 deg).
-  const Poses gt = line(5);
+  const Poses gt = test::line(5);
   Poses est = gt;
   est[2] = test::pose(2, 0, 0, 2.0 * kDeg);
   const auto r = compute_rpe(seconds(5, 1.0), gt, est, {1.0, DeltaUnit::Seconds});
@@ -81,7 +75,7 @@ TEST(Rpe, IsInvariantToARigidMotionOfTheEstimate) {
 }
 
 TEST(RpePairs, FramesSecondsAndMetres) {
-  const Poses gt = line(11);  // 1 m apart
+  const Poses gt = test::line(11);  // 1 m apart
   const auto f = rpe_pairs(seconds(11, 0.1), gt, {3.0, DeltaUnit::Frames});
   EXPECT_EQ(f, (std::vector<std::pair<std::size_t, std::size_t>>{{0, 3}, {3, 6}, {6, 9}}));
   // 10 Hz stamps written as decimals: 0.1 * 10 may land a hair under 1.0; the slack still counts it.
@@ -128,7 +122,7 @@ TEST(DistanceTravelled, AStandstillsJitterAddsNothing) {
 TEST(DistanceTravelled, NoneWithoutMotionAndABadStepIsAnError) {
   const Poses still(10, test::pose(3, 4, 5));
   EXPECT_FALSE(compute_distance_travelled(still, still));
-  EXPECT_THROW(compute_distance_travelled(line(5), line(5), 0.0), InputError);
+  EXPECT_THROW(compute_distance_travelled(test::line(5), test::line(5), 0.0), InputError);
 }
 
 TEST(AteSplit, ErrorsLandOnTheirAxesRoundACurve) {
@@ -180,7 +174,7 @@ TEST(AteSplit, AStandstillKeepsTheHeadingItStartsOrStopsWith) {
 }
 
 TEST(Rpe, TooShortForDeltaIsNotANumber) {
-  const Poses gt = line(5);
+  const Poses gt = test::line(5);
   EXPECT_FALSE(compute_rpe(seconds(5, 0.1), gt, gt, {1.0, DeltaUnit::Seconds}));
   EXPECT_THROW(compute_rpe(seconds(5, 0.1), gt, gt, {0.0, DeltaUnit::Seconds}), InputError);
 }

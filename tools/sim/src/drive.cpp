@@ -4,12 +4,12 @@
 #include <cmath>
 #include <numbers>
 
+#include "liod/sim/angles.hpp"
 #include "liod/sim/rng.hpp"
 
 namespace liod::sim {
 
 namespace {
-constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr std::uint64_t kDriveStream = 0x6472697665ULL;
 constexpr double kKnot = 0.01;    // s between spline control points
 constexpr double kStep = 0.001;   // s, driver and suspension integration step

@@ -3,11 +3,9 @@
 #include <cmath>
 #include <numbers>
 
-namespace liod::sim {
+#include "liod/sim/angles.hpp"
 
-namespace {
-constexpr double kDeg = std::numbers::pi / 180.0;
-}
+namespace liod::sim {
 
 ImuReading ideal_imu(const BodyState& s) {
   ImuReading r;

@@ -8,10 +8,11 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "liod/sim/angles.hpp"
+
 namespace liod::sim {
 
 namespace {
-constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr std::uint64_t kCalibStream = 0x63616C6962ULL;
 
 std::size_t slot(int az_step, int ch) {

@@ -7,13 +7,13 @@
 #include <thread>
 #include <vector>
 
+#include "liod/sim/angles.hpp"
 #include "liod/sim/helios_packet.hpp"
 #include "liod/sim/pcap_writer.hpp"
 
 namespace liod::sim {
 
 namespace {
-constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr std::uint64_t kMountStream = 0x6D6F756E74ULL;
 constexpr std::uint64_t kLidarStream = 0x6C69646172ULL;
 constexpr std::uint64_t kNetStream = 0x6E6574ULL;

@@ -13,6 +13,7 @@
 #include <string_view>
 #include <vector>
 
+#include "liod/drivers/c_file.hpp"
 #include "liod/types.hpp"
 
 namespace liod::drivers {
@@ -55,11 +56,8 @@ class ImuCsvWriter {
   void flush();
 
  private:
-  struct FileCloser {
-    void operator()(std::FILE* f) const noexcept { std::fclose(f); }
-  };
   std::string path_;
-  std::unique_ptr<std::FILE, FileCloser> file_;
+  CFile file_;
 };
 
 }  // namespace liod::drivers

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "liod/drivers/c_file.hpp"
 #include "liod/drivers/pcap_reader.hpp"
 
 namespace liod::drivers {
@@ -28,11 +29,8 @@ class PcapWriter {
   void flush();
 
  private:
-  struct FileCloser {
-    void operator()(std::FILE* f) const noexcept { std::fclose(f); }
-  };
   std::string path_;
-  std::unique_ptr<std::FILE, FileCloser> file_;
+  CFile file_;
   std::vector<std::uint8_t> frame_;
 };
 

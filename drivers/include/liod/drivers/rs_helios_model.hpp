@@ -38,6 +38,7 @@ inline constexpr std::size_t kSlotBytes = 3;  // §2.2
 inline constexpr std::size_t kMaxPointsPerPacket = kBlocksPerPacket * kSlotsPerBlock;
 
 inline constexpr std::uint16_t kAzimuthUnits = 36000;  // 0.01° per unit
+inline constexpr std::int32_t kFullCircle = kAzimuthUnits;  // the same, as a signed count for azimuth arithmetic
 /// Consecutive blocks further apart than this (1.00°) straddle the FOV blind zone (§3).
 inline constexpr std::int32_t kBlindZoneJump = 100;
 
