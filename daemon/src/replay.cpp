@@ -106,7 +106,9 @@ void print_summary(Pipeline& pipeline, const PcapLidarSource& pcap, double wall_
   const auto& ps = pcap.stats();
   const auto hs = pipeline.lidar_output().decoder_stats();
   out << "replay: " << t.scans << " scans (" << t.processed << " with a pose, " << t.keyframes << " keyframes, "
-      << t.degenerate << " degenerate), " << t.imu_fed << " IMU samples (" << t.imu_dropped << " dropped)\n";
+      << t.degenerate << " degenerate), " << t.imu_fed << " IMU samples ("
+      << t.imu_dropped + pipeline.imu_output().out_of_range() << " dropped, " << pipeline.imu_output().out_of_range()
+      << " of them beyond the measurement range; " << pipeline.imu_output().saturated() << " saturated)\n";
   out << "packets: " << hs.msop << " MSOP, " << hs.difop << " DIFOP, " << hs.rejected() << " rejected, "
       << ps.dropped() << " dropped by the pcap reader\n";
   out << std::fixed << std::setprecision(2) << "front end per scan (deskew + features + registration): median "
