@@ -37,9 +37,26 @@ Config helios16p_config(std::uint16_t msop, std::uint16_t difop) {
   return c;
 }
 
+/// The sweeps waiting in `ring`, in order.
+std::vector<SweepSummary> drain(drivers::SpscRing<ScanItem>& ring) {
+  std::vector<SweepSummary> sweeps;
+  ScanItem s;
+  while (ring.try_pop(s)) sweeps.push_back({s.scan.start_time, s.scan.end_time, s.scan.points.size()});
+  return sweeps;
+}
+
+/// Once `out` has all `sent` datagrams: stops the driver thread and returns the sweeps it made.
+std::vector<SweepSummary> finish_and_drain(LidarOutput& out, std::size_t sent, std::atomic<bool>& stop,
+                                           std::thread& driver, drivers::SpscRing<ScanItem>& ring) {
+  EXPECT_TRUE(test::wait_for([&] { return out.packets() >= sent; }, std::chrono::milliseconds(5000)));
+  stop = true;
+  driver.join();
+  out.finish();
+  return drain(ring);
+}
+
 /// The sweeps of the capture decoded from the file with the same settings: the reference.
 std::vector<SweepSummary> file_sweeps(const Config& config, const std::filesystem::path& pcap) {
-  std::vector<SweepSummary> expected;
   drivers::SpscRing<ScanItem> ring(64);
   std::atomic<bool> stop{false};
   LidarOutput out(config, ring, true, false, stop);
@@ -47,9 +64,7 @@ std::vector<SweepSummary> file_sweeps(const Config& config, const std::filesyste
   drivers::UdpDatagram d;
   while (reader.next(d)) out.packet(d.payload, d.capture_time_ns, d.dst_port);
   out.finish();
-  ScanItem s;
-  while (ring.try_pop(s)) expected.push_back({s.scan.start_time, s.scan.end_time, s.scan.points.size()});
-  return expected;
+  return drain(ring);
 }
 
 const std::filesystem::path kHelios16pPcap = test::shared_dir() / "data/robosense/helios16p_5rev.pcap";
@@ -69,13 +84,7 @@ void udp_same_sweeps(double pace) {
   std::thread driver([&] { source.run(out, stop); });
   std::this_thread::sleep_for(std::chrono::milliseconds(200));  // sockets bound
   const std::size_t sent = test::send_pcap_loopback(pcap.string(), {{6699, port}, {7788, static_cast<std::uint16_t>(port + 1)}}, pace);
-  ASSERT_TRUE(test::wait_for([&] { return out.packets() >= sent; }, std::chrono::milliseconds(5000)));
-  stop = true;
-  driver.join();
-  out.finish();
-  std::vector<SweepSummary> got;
-  ScanItem s;
-  while (ring.try_pop(s)) got.push_back({s.scan.start_time, s.scan.end_time, s.scan.points.size()});
+  const std::vector<SweepSummary> got = finish_and_drain(out, sent, stop, driver, ring);
   EXPECT_EQ(sent, 751U);  // 750 MSOP + 1 DIFOP
   EXPECT_EQ(out.packets(), sent);
   EXPECT_EQ(out.decoder_stats().lost_packets, 0U);
@@ -148,13 +157,7 @@ TEST(UdpLidar, ASecondSenderOnTheLidarPortIsDroppedAndCounted) {
   ASSERT_TRUE(test::wait_for([&] { return out.packets() >= 1; }, std::chrono::milliseconds(2000)));
   const std::size_t foreign_sent = send_from("127.0.0.2", port, foreign, std::chrono::microseconds(1000));
   lidar.join();
-  ASSERT_TRUE(test::wait_for([&] { return out.packets() >= sent; }, std::chrono::milliseconds(5000)));
-  stop = true;
-  driver.join();
-  out.finish();
-  std::vector<SweepSummary> got;
-  ScanItem s;
-  while (ring.try_pop(s)) got.push_back({s.scan.start_time, s.scan.end_time, s.scan.points.size()});
+  const std::vector<SweepSummary> got = finish_and_drain(out, sent, stop, driver, ring);
   EXPECT_EQ(foreign_sent, 300U);
   EXPECT_EQ(out.packets(), sent);  // the LiDAR's datagrams only
   EXPECT_EQ(out.transport.refused.load(), foreign_sent);
