@@ -112,7 +112,8 @@ bool BackendWorker::process(const Keyframe& keyframe) {
                  backend_.correction().translation().norm(), backend_.stats().solve_ms.back());
     const Eigen::Isometry3d correction = backend_.correction();
     std::lock_guard lock(correction_mutex_);
-    correction_ = correction;
+    correction_.map_from_odom = correction;
+    ++correction_.sequence;
   }
   if (writer_) save_state();
   return closed;
@@ -144,7 +145,7 @@ void BackendWorker::finish() {
   }
 }
 
-Eigen::Isometry3d BackendWorker::correction() const {
+MapCorrection BackendWorker::correction() const {
   std::lock_guard lock(correction_mutex_);
   return correction_;
 }

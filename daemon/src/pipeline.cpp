@@ -238,6 +238,20 @@ void Pipeline::note_host_clock_jump() noexcept {
   host_jump_steady_ns_.store(steady_ns(), std::memory_order_relaxed);
 }
 
+void Pipeline::place_in_map(pose::PoseMessage& m) const {
+  if (!backend_) {
+    m.map_position = m.position;
+    m.map_orientation = m.orientation;
+    m.flags |= pose::kNotLocalized;
+    return;
+  }
+  const MapCorrection c = backend_->correction();
+  m.map_position = c.map_from_odom * m.position;
+  m.map_orientation = Eigen::Quaterniond(c.map_from_odom.linear()) * m.orientation;
+  m.map_orientation.normalize();
+  m.correction_sequence = c.sequence;
+}
+
 bool Pipeline::make_imu_pose(const ImuItem& item, PoseEvent& ev) {
   if ((item.sample.flags & ImuSample::kSaturated) != 0) imu_saturated_time_ = item.sample.time;
   const auto state = propagator_.add(item.sample);
@@ -264,6 +278,7 @@ bool Pipeline::make_imu_pose(const ImuItem& item, PoseEvent& ev) {
     implausible_poses_.fetch_add(1, std::memory_order_relaxed);
   }
   ev.message.flags = with_ok(f | live_flags(state->time));
+  place_in_map(ev.message);
   ev.input_steady_ns = item.arrival_steady_ns;
   return true;
 }
@@ -387,6 +402,7 @@ void Pipeline::process_scan(OdometryLoop& loop, ScanItem& item) {
   if (loop.last_saturated > loop.previous_scan_time) f |= pose::kImuSaturated;
   loop.previous_scan_time = result->state.time;
   ev.message.flags = with_ok(f);
+  place_in_map(ev.message);
   ev.diagnostics = scan_diagnostics(*result, item.features_ms);
   ev.input_steady_ns = item.ready_steady_ns - item.queued_ns;
   ev.queued_ns = item.queued_ns;

@@ -78,7 +78,12 @@ void encode(const PoseMessage& m, std::vector<std::uint8_t>& out) {
     for (int c = r; c < 6; ++c) put_f64(out, m.covariance(r, c));
   }
   put_u32(out, m.flags);
-  put_u32(out, 0);
+  put_u32(out, m.correction_sequence);
+  for (int i = 0; i < 3; ++i) put_f64(out, m.map_position[i]);
+  put_f64(out, m.map_orientation.x());
+  put_f64(out, m.map_orientation.y());
+  put_f64(out, m.map_orientation.z());
+  put_f64(out, m.map_orientation.w());
 }
 
 void encode_health(const std::string& json, std::uint32_t sequence, std::vector<std::uint8_t>& out) {
@@ -89,10 +94,11 @@ void encode_health(const std::string& json, std::uint32_t sequence, std::vector<
 std::string flag_names(std::uint32_t flags) {
   static const char* kNames[] = {"initializing", "ok",           "degenerate", "imu_lost",        "lidar_lost",
                                  "keyframe",     "few_features", "clock_jump", "imu_inconsistent", "implausible",
-                                 "sweep_truncated", "calibration_changed", "imu_saturated"};
+                                 "sweep_truncated", "calibration_changed", "imu_saturated", "",
+                                 "not_localized"};
   std::string s;
   for (int i = 0; i < static_cast<int>(std::size(kNames)); ++i) {
-    if ((flags & (1U << i)) == 0) continue;
+    if ((flags & (1U << i)) == 0 || *kNames[i] == '\0') continue;
     if (!s.empty()) s += '|';
     s += kNames[i];
   }
@@ -128,7 +134,13 @@ std::string to_json_line(const PoseMessage& m) {
   }
   s += ",\"cov\":";
   json_array(s, cov, 21);
-  s += ",\"flags\":" + std::to_string(m.flags) + ",\"status\":\"" + flag_names(m.flags) + "\"}\n";
+  s += ",\"flags\":" + std::to_string(m.flags) + ",\"status\":\"" + flag_names(m.flags) + "\"";
+  s += ",\"map_seq\":" + std::to_string(m.correction_sequence) + ",\"map_p\":";
+  json_array(s, m.map_position.data(), 3);
+  const double mq[4] = {m.map_orientation.x(), m.map_orientation.y(), m.map_orientation.z(), m.map_orientation.w()};
+  s += ",\"map_q\":";
+  json_array(s, mq, 4);
+  s += "}\n";
   return s;
 }
 
@@ -169,6 +181,9 @@ DecodeStatus decode(std::span<const std::uint8_t> b, Message& out, std::size_t& 
       }
     }
     m.flags = get_u32(p + 296);
+    m.correction_sequence = get_u32(p + 300);
+    for (int i = 0; i < 3; ++i) m.map_position[i] = get_f64(p + 304 + 8 * i);
+    m.map_orientation = Eigen::Quaterniond(get_f64(p + 352), get_f64(p + 328), get_f64(p + 336), get_f64(p + 344));
   } else {
     out.health.assign(reinterpret_cast<const char*>(p + kHeaderSize), length - kHeaderSize);
   }

@@ -26,6 +26,9 @@ pose::PoseMessage sample_message(std::uint32_t i) {
   for (int r = 0; r < 6; ++r)
     for (int c = 0; c < 6; ++c) m.covariance(r, c) = r == c ? 0.01 * (r + 1) : 0.001 * (r + c);
   m.flags = pose::kOk | pose::kKeyframe;
+  m.correction_sequence = 3 + i;
+  m.map_position = Eigen::Vector3d(101.5 + i, -7.75, 0.5);
+  m.map_orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.31, Eigen::Vector3d::UnitZ()));
   return m;
 }
 
@@ -50,10 +53,12 @@ TEST(PoseProtocol, BinaryRoundTripIsExactAndLittleEndian) {
   ASSERT_EQ(bytes.size(), pose::kPoseMessageSize);
   EXPECT_EQ(bytes[0], 'L');
   EXPECT_EQ(bytes[3], 'D');
-  EXPECT_EQ(bytes[4], 1);  // version 1, little-endian
+  EXPECT_EQ(bytes[4], 2);  // version 2, little-endian
   EXPECT_EQ(bytes[5], 0);
-  EXPECT_EQ(bytes[8], 304 & 0xFF);
-  EXPECT_EQ(bytes[9], 304 >> 8);
+  EXPECT_EQ(bytes[8], 360 & 0xFF);
+  EXPECT_EQ(bytes[9], 360 >> 8);
+  EXPECT_EQ(bytes[300], 7);  // the correction sequence, little-endian, after the flags
+  EXPECT_EQ(bytes[301], 0);
   pose::Message out;
   std::size_t used = 0;
   ASSERT_EQ(pose::decode(bytes, out, used), pose::DecodeStatus::Ok);
@@ -63,6 +68,13 @@ TEST(PoseProtocol, BinaryRoundTripIsExactAndLittleEndian) {
   EXPECT_EQ(out.pose.orientation.coeffs(), m.orientation.coeffs());
   EXPECT_EQ(out.pose.covariance, m.covariance);
   EXPECT_EQ(out.pose.flags, m.flags);
+  EXPECT_EQ(out.pose.correction_sequence, m.correction_sequence);
+  EXPECT_EQ(out.pose.map_position, m.map_position);
+  EXPECT_EQ(out.pose.map_orientation.coeffs(), m.map_orientation.coeffs());
+  // A version 1 stream is not read as this one.
+  std::vector<std::uint8_t> v1 = bytes;
+  v1[4] = 1;
+  EXPECT_EQ(pose::decode(v1, out, used), pose::DecodeStatus::Invalid);
   // Partial input waits for more; a wrong magic is rejected.
   EXPECT_EQ(pose::decode(std::span(bytes).first(100), out, used), pose::DecodeStatus::NeedMore);
   bytes[0] = 'X';

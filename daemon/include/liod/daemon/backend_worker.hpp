@@ -8,6 +8,7 @@
 // optimisation: the correction is copied under a mutex only after a solve finished.
 
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -20,6 +21,13 @@
 namespace liod {
 
 class StateWriter;
+
+/// The map frame's place: T_map_odom maps the odometry's poses into the backend's optimised map
+/// (REP 105's map -> odom); `sequence` counts its changes (0: none yet, the identity).
+struct MapCorrection {
+  Eigen::Isometry3d map_from_odom = Eigen::Isometry3d::Identity();
+  std::uint32_t sequence = 0;
+};
 
 struct BackendWorkerOptions {
   /// Called on the backend thread before each keyframe's work (its loop search and solve):
@@ -39,8 +47,8 @@ class BackendWorker {
   /// End of the stream: the final state and the global map (map.pcd) when persisting.
   void finish();
 
-  /// Latest T_world_odom (identity until a loop closes); any thread.
-  Eigen::Isometry3d correction() const;
+  /// The latest correction (identity until a loop closes); any thread, without waiting for a solve.
+  MapCorrection correction() const;
   /// The algorithm's state; read it only when the backend thread is not running (after join).
   const Backend& backend() const { return backend_; }
   /// Loops found/rejected and solve times, for the replay summary.
@@ -55,7 +63,7 @@ class BackendWorker {
   Backend backend_;
   bool state_frozen_ = false;
   mutable std::mutex correction_mutex_;
-  Eigen::Isometry3d correction_ = Eigen::Isometry3d::Identity();
+  MapCorrection correction_;
 };
 
 }  // namespace liod

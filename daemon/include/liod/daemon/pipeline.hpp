@@ -212,6 +212,9 @@ class Pipeline {
   /// replay must not depend on thread timing).
   std::uint32_t live_flags(double pose_time) const;
   /// Propagates `item` from the latest anchor into an IMU-rate pose; false before the first anchor.
+  /// The map-frame pose of `m` (its odometry-frame pose set): the backend's latest correction
+  /// applied, or the odometry pose flagged not_localized without a backend.
+  void place_in_map(pose::PoseMessage& m) const;
   bool make_imu_pose(const ImuItem& item, PoseEvent& ev);
   /// Live: the IMU thread's IMU-rate pose for each sample.
   void publish_imu_pose(const ImuItem& item);

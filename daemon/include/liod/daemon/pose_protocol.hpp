@@ -1,5 +1,5 @@
 #pragma once
-// The pose socket's wire format, version 1 (docs/pose-protocol.md is the reference for clients
+// The pose socket's wire format, version 2 (docs/pose-protocol.md is the reference for clients
 // written in other languages). Every multi-byte field is LITTLE-endian, written byte by byte so
 // the host's byte order never matters; doubles are IEEE-754 binary64.
 //
@@ -7,18 +7,23 @@
 //   0      4     magic "LIOD" (bytes 4C 49 4F 44)
 //   4      2     version (1)
 //   6      2     type: 1 scan-rate pose, 2 IMU-rate pose, 3 health (JSON body)
-//   8      4     length of the whole message in bytes (304 for poses, 16 + n for health)
+//   8      4     length of the whole message in bytes (360 for poses, 16 + n for health)
 //   12     4     sequence number (per connection stream of the server, +1 per message sent)
 //   -- pose body (types 1, 2) --
 //   16     8     time, s (the IMU clock, Unix epoch when the sensors are synchronised)
-//   24     24    position x y z, m, world frame (gravity-aligned, z up, origin at the first pose)
-//   48     32    orientation quaternion qx qy qz qw (body -> world)
-//   80     24    velocity x y z, m/s, world frame
+//   24     24    position x y z, m, odometry frame (gravity-aligned, z up, origin at the first
+//                pose; continuous: never jumps, drifts slowly; REP 105's odom)
+//   48     32    orientation quaternion qx qy qz qw (body -> odometry frame)
+//   80     24    velocity x y z, m/s, odometry frame
 //   104    24    angular rate x y z, rad/s, body frame (gyro minus estimated bias)
 //   128    168   pose covariance: upper triangle (row-major, 21 values) of the 6x6 covariance of
 //                [position x y z (m), rotation error x y z (rad, body frame, R = R_est * Exp(e))]
 //   296    4     status flags (Flag below)
-//   300    4     reserved (0)
+//   300    4     map correction sequence: +1 each time the backend's correction changes (a loop
+//                closed); 0 while there is none
+//   304    24    position x y z, m, map frame (REP 105's map: the odometry pose with the backend's
+//                latest correction T_map_odom applied; jumps when a loop closes)
+//   328    32    orientation quaternion qx qy qz qw (body -> map frame)
 //   -- health body (type 3) --
 //   16     n     UTF-8 JSON object
 //
@@ -38,9 +43,9 @@
 namespace liod::pose {
 
 inline constexpr std::uint8_t kMagic[4] = {'L', 'I', 'O', 'D'};
-inline constexpr std::uint16_t kVersion = 1;
+inline constexpr std::uint16_t kVersion = 2;
 inline constexpr std::size_t kHeaderSize = 16;
-inline constexpr std::size_t kPoseMessageSize = 304;
+inline constexpr std::size_t kPoseMessageSize = 360;
 inline constexpr std::size_t kMaxMessageSize = 1 << 20;
 
 enum class MessageType : std::uint16_t { ScanPose = 1, ImuPose = 2, Health = 3 };
@@ -59,6 +64,7 @@ enum Flag : std::uint32_t {
   kSweepTruncated = 1U << 10,  ///< sweeps before this scan were cut at the size cap and dropped (a stuck azimuth)
   kCalibrationChanged = 1U << 11,  ///< the LiDAR's DIFOP disagreed with the calibration in use, or a new one began
   kImuSaturated = 1U << 12,    ///< an IMU sample since the previous pose clipped at the sensor's range
+  kNotLocalized = 1U << 14,    ///< the map-frame pose is the odometry's: no backend places it in a map
 };
 
 struct PoseMessage {
@@ -71,9 +77,12 @@ struct PoseMessage {
   Eigen::Vector3d angular_rate = Eigen::Vector3d::Zero();
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
   std::uint32_t flags = 0;
+  std::uint32_t correction_sequence = 0;
+  Eigen::Vector3d map_position = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond map_orientation = Eigen::Quaterniond::Identity();
 };
 
-/// Appends the 304-byte binary form of `m` to `out`.
+/// Appends the 360-byte binary form of `m` to `out`.
 void encode(const PoseMessage& m, std::vector<std::uint8_t>& out);
 /// Appends a health message (header + JSON body).
 void encode_health(const std::string& json, std::uint32_t sequence, std::vector<std::uint8_t>& out);
@@ -91,7 +100,7 @@ struct Message {
 
 enum class DecodeStatus { Ok, NeedMore, Invalid };
 /// Decodes the message at the front of `bytes`; on Ok `consumed` is its length. Invalid means the
-/// stream is not (or no longer) a liod v1 stream: wrong magic, version or length.
+/// stream is not (or no longer) a liod v2 stream: wrong magic, version or length.
 DecodeStatus decode(std::span<const std::uint8_t> bytes, Message& out, std::size_t& consumed);
 
 /// What a client has asked for with its request lines.
