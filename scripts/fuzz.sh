@@ -13,7 +13,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-60}
 build=${2:-build-fuzz}
 targets=(fuzz_rs_helios fuzz_pcap_reader fuzz_imu_csv fuzz_mtdata2 fuzz_can_imu fuzz_angles_csv fuzz_time_sync fuzz_config
-  fuzz_pose_socket)
+  fuzz_pose_socket fuzz_pipeline)
 
 command -v clang++ >/dev/null || { echo "fuzz.sh: clang++ not found (scripts/install-deps.sh installs it)" >&2; exit 1; }
 cmake -S . -B "$build" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=Release -DLIOD_FUZZ=ON \
