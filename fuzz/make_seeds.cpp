@@ -10,12 +10,14 @@
 
 #include <linux/can.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -261,6 +263,55 @@ void text_seeds(SeedWriter& out) {
 
 }  // namespace
 
+// ---- fuzz_pipeline: model byte + records (see fuzz_pipeline.cpp) ---------------------------------
+// A tiny synthetic drive at rest: sweeps of six copies of one simulated MSOP packet, their blocks'
+// azimuths rewritten to six 60-degree steps, with a level IMU at rest sampled every 5 ms between
+// them. A few thousand points a sweep keep a run of several sweeps to milliseconds.
+void put_imu(Bytes& out, std::uint8_t step, const std::array<std::int16_t, 6>& axes) {
+  out.push_back(0);
+  out.push_back(step);
+  for (const std::int16_t v : axes) {
+    out.push_back(static_cast<std::uint8_t>(v & 0xFF));
+    out.push_back(static_cast<std::uint8_t>((v >> 8) & 0xFF));
+  }
+}
+
+Bytes tiny_drive(const Bytes& msop, int sweeps, std::int16_t gyro_z) {
+  Bytes b{0};
+  const std::array<std::int16_t, 6> at_rest{0, 0, gyro_z, 0, 0, 2452};  // 9.81 m/s^2 in 4e-3 units
+  for (int i = 0; i < 20; ++i) put_imu(b, 9, at_rest);  // 0.1 s of IMU before the first packet
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    for (int k = 0; k < 6; ++k) {
+      Bytes packet = msop;
+      for (std::size_t block = 0; block < helios::kBlocksPerPacket; ++block) {
+        const auto azimuth = static_cast<std::uint16_t>(k * 6000 + static_cast<int>(block) * 20);
+        std::uint8_t* at = packet.data() + helios::kHeaderBytes + block * helios::kBlockBytes + 2;
+        at[0] = static_cast<std::uint8_t>(azimuth >> 8);
+        at[1] = static_cast<std::uint8_t>(azimuth & 0xFF);
+      }
+      b.push_back(1);
+      b.push_back(1);
+      b.insert(b.end(), packet.begin(), packet.end());
+      for (int i = 0; i < 3; ++i) put_imu(b, 9, at_rest);  // 16 ms to the next packet
+    }
+  }
+  for (int i = 0; i < 4; ++i) put_imu(b, 9, at_rest);
+  return b;
+}
+
+void pipeline_seeds(SeedWriter& out) {
+  Bytes msop;
+  for (const Packet& p : read_packets(kSource / "fuzz" / "corpus" / "sim-5515-single.pcap")) {
+    if (!has_difop_magic(p.payload)) {
+      msop = p.payload;
+      break;
+    }
+  }
+  if (msop.size() != helios::kPacketBytes) throw std::runtime_error("no MSOP packet in sim-5515-single.pcap");
+  out.write("fuzz_pipeline", "tiny-sweeps-at-rest", tiny_drive(msop, 5, 0));
+  out.write("fuzz_pipeline", "tiny-sweeps-turning", tiny_drive(msop, 5, 200));
+}
+
 int main(int argc, char** argv) {
   if (argc != 2) {
     std::cerr << "usage: " << argv[0] << " OUT_DIR\n";
@@ -279,6 +330,7 @@ int main(int argc, char** argv) {
       const fs::path path = fs::path(LIOD_SHARED_DIR) / "data" / "robosense" / csv;
       if (fs::exists(path)) out.write("fuzz_angles_csv", csv, read_text(path));
     }
+    pipeline_seeds(out);
     time_sync_seeds(out);
     mtdata2_seeds(out);
     can_seeds(out);

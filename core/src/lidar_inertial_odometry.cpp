@@ -35,7 +35,7 @@ double velocity_std(const StateCovariance& p) { return std::sqrt(p.block<3, 3>(6
 
 FeatureParams LidarInertialOdometry::feature_params(const FrontEndConfig& config) { return liod::feature_params(config); }
 
-LidarInertialOdometry::LidarInertialOdometry(const FrontEndConfig& config)
+LidarInertialOdometry::LidarInertialOdometry(const FrontEndConfig& config, const StateLimits& limits)
     : config_(config),
       extrinsics_(config.extrinsics),
       lidar_to_imu_{config.extrinsics.lidar_to_imu_rotation, config.extrinsics.lidar_to_imu_translation},
@@ -45,7 +45,8 @@ LidarInertialOdometry::LidarInertialOdometry(const FrontEndConfig& config)
       start_up_(start_up_config(config)),
       holds_(bias_hold_config(config.odometry)),
       move_off_(move_off_config(config.odometry)),
-      window_(keyframe_window_config(config.odometry, update_params_)) {
+      window_(keyframe_window_config(config.odometry, update_params_)),
+      reinit_(reinitialization_config(config.odometry, limits)) {
   noise_.gyro_noise_density = config.imu.gyro_noise_density;
   noise_.accel_noise_density = config.imu.accel_noise_density;
   noise_.gyro_bias_random_walk = config.imu.gyro_bias_random_walk;
@@ -74,11 +75,16 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan, c
     result.status |= kStatusSpeedUnknown;
     return result;
   }
-  if (start_up_.searching()) return search_start(scan, extracted);
+  if (start_up_.searching()) {
+    auto result = search_start(scan, extracted);
+    if (result) check_recovery(*result);
+    return result;
+  }
   if (!(scan_end_time(scan) > state_.time)) return std::nullopt;  // a scan from the past (clock jump)
   OdometryResult result;
   result.points = scan.points.size();
   process_scan(scan, extracted, result);
+  check_recovery(result);
   return result;
 }
 
@@ -104,6 +110,8 @@ std::optional<OdometryResult> LidarInertialOdometry::search_start(const Scan& sc
   }
   const std::optional<StartDecision> decision = start_up_.add_scan(scan, imu_, state_);
   if (!decision) return std::nullopt;  // no pose until the speed is known
+  // After an implausible state the start-up continues from the last plausible pose.
+  if (const auto anchor = reinit_.take_anchor()) state_ = placed_at(state_, *anchor, config_.odometry.forward_axis);
   if (decision->speed) holds_.hold_forward(start_up_.start_at_speed(*decision->speed, state_, covariance_));
   const bool standstill = decision->standstill();
   move_off_.begin(standstill, state_.position);
@@ -130,6 +138,7 @@ void LidarInertialOdometry::process_scan(const Scan& scan, const ScanFeatures* e
   //    the sweep (imu_buffer.hpp bridges the IMU's gaps).
   auto t = Clock::now();
   Prediction prediction = predict(scan, result);
+  restart_map_if_lost(prediction);
   result.deskew_ms = elapsed_ms(t);
 
   // 2. Features: the scan's edges and planes by distance-adaptive curvature (unless extracted
@@ -311,6 +320,40 @@ void LidarInertialOdometry::update_map(const DeskewedFeatures& features, Odometr
     result.status |= kStatusKeyframe;
   }
   move_off_.update(state_.position, window_.keyframes().size());
+}
+
+void LidarInertialOdometry::restart_map_if_lost(Prediction& prediction) {
+  if (window_.plane_map().empty()) return;
+  const StateCovariance transition = imu_transition(prediction.preintegration, prediction.start);
+  if (!reinit_.beyond_basin(relative_prediction_covariance(prediction.covariance, transition, covariance_))) return;
+  // The map left behind is out of the prediction's reach: a new one from the dead-reckoned state,
+  // deskewed and registered from here on as after a rolling start until the velocity is known.
+  window_.restart();
+  map_trusted_ = false;
+  reinit_.begin_new_map(prediction.covariance);
+}
+
+void LidarInertialOdometry::check_recovery(OdometryResult& result) {
+  if (!reinit_.check(result.state, result.covariance)) {
+    // Nothing of this state can be trusted, its biases and velocity least: the start-up again,
+    // with the IMU samples still held, and the pose placed where the last plausible one was.
+    initialized_ = false;
+    start_up_.abandon();
+    window_.restart();
+    map_trusted_ = false;
+    holds_ = BiasHolds(bias_hold_config(config_.odometry));
+    move_off_ = MoveOff(move_off_config(config_.odometry));
+    result.status |= kStatusInitializing;
+    return;
+  }
+  if (reinit_.recovering()) {
+    const bool registered = result.residuals > 0;  // on a map, not the prediction taken for the first keyframe
+    const bool constrained = (result.status & (kStatusDegenerate | kStatusFewFeatures)) == 0;
+    if (!reinit_.converged(map_trusted_, registered, constrained)) result.status |= kStatusInitializing;
+  }
+  // The new maps' frames lie where the dead reckoning put them: the published pose is that
+  // uncertain in the first map's frame.
+  if (reinit_.new_maps() > 0) result.covariance.block<3, 3>(3, 3) += reinit_.frame_position_covariance();
 }
 
 }  // namespace liod

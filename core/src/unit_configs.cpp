@@ -85,6 +85,13 @@ UpdateParams update_params(const FrontEndConfig& config) {
   return u;
 }
 
+ReinitializationConfig reinitialization_config(const OdometryConfig& o, const StateLimits& limits) {
+  ReinitializationConfig r;
+  r.registration_basin_m = o.correspondence_gate_m;
+  r.limits = limits;
+  return r;
+}
+
 KeyframeWindowConfig keyframe_window_config(const OdometryConfig& o, const UpdateParams& update) {
   KeyframeWindowConfig k;
   k.gating = o.keyframe_gating;

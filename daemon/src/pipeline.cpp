@@ -343,7 +343,7 @@ ScanDiagnostics scan_diagnostics(const OdometryResult& result, double features_m
 
 // The odometry thread's state between its steps.
 struct Pipeline::OdometryLoop {
-  explicit OdometryLoop(const Config& config) : odometry(config) {}
+  explicit OdometryLoop(const Config& config) : odometry(config, state_limits(config)) {}
   LidarInertialOdometry odometry;
   bool lockstep = false;
   bool imu_poses = false;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <optional>
 
@@ -33,12 +34,15 @@ double degrees(double rad) { return rad * 180.0 / std::numbers::pi; }
 
 }  // namespace
 
-Accuracy scan_accuracy(const std::vector<pose::PoseMessage>& poses, const eval::Trajectory& truth, double from,
-                       double to) {
+namespace {
+
+Accuracy accuracy_of(const std::vector<pose::PoseMessage>& poses, const eval::Trajectory& truth, double from, double to,
+                     double aligned_from, double aligned_to, bool ok_only) {
   eval::Trajectory est;
   est.name = "scan poses";
   for (const auto& p : poses) {
-    if (p.type != pose::MessageType::ScanPose) continue;
+    if (p.type != pose::MessageType::ScanPose || p.time < aligned_from || p.time >= aligned_to) continue;
+    if (ok_only && (p.flags & pose::kOk) == 0) continue;
     est.stamps.push_back(p.time);
     est.poses.push_back(to_isometry(p));
   }
@@ -61,10 +65,44 @@ Accuracy scan_accuracy(const std::vector<pose::PoseMessage>& poses, const eval::
   return acc;
 }
 
-Jump largest_jump(const std::vector<pose::PoseMessage>& poses, const eval::Trajectory& truth) {
+}  // namespace
+
+Accuracy scan_accuracy(const std::vector<pose::PoseMessage>& poses, const eval::Trajectory& truth, double from,
+                       double to) {
+  return accuracy_of(poses, truth, from, to, -1e300, 1e300, false);
+}
+
+Accuracy scan_accuracy_within(const std::vector<pose::PoseMessage>& poses, const eval::Trajectory& truth, double from,
+                              double to, bool ok_only) {
+  return accuracy_of(poses, truth, from, to, from, to, ok_only);
+}
+
+double position_error_after(const std::vector<pose::PoseMessage>& poses, const eval::Trajectory& truth, double from,
+                            double to, double t) {
+  eval::Trajectory est;
+  const pose::PoseMessage* at = nullptr;
+  for (const auto& p : poses) {
+    if (p.type != pose::MessageType::ScanPose) continue;
+    if (at == nullptr && p.time >= t) at = &p;
+    if (p.time < from || p.time >= to) continue;
+    est.stamps.push_back(p.time);
+    est.poses.push_back(to_isometry(p));
+  }
+  if (at == nullptr || est.size() < 3) return std::numeric_limits<double>::infinity();
+  eval::AssociationOptions association;
+  association.interpolation = eval::Interpolation::On;
+  const auto pairs = eval::associate(truth, est, association);
+  const auto alignment = eval::align(pairs.gt, pairs.est, eval::AlignmentOptions{});
+  const auto placed = eval::apply_similarity(alignment.transform, eval::Poses{to_isometry(*at)});
+  return (placed.front().translation() - truth_at(truth, at->time).translation()).norm();
+}
+
+Jump largest_jump(const std::vector<pose::PoseMessage>& poses, const eval::Trajectory& truth, bool with_initializing,
+                  double from) {
   Jump worst;
   for (std::size_t i = 1; i < poses.size(); ++i) {
-    if (((poses[i - 1].flags | poses[i].flags) & pose::kInitializing) != 0) continue;
+    if (!with_initializing && ((poses[i - 1].flags | poses[i].flags) & pose::kInitializing) != 0) continue;
+    if (poses[i - 1].time < from) continue;
     const Eigen::Isometry3d a = to_isometry(poses[i - 1]);
     const Eigen::Isometry3d b = to_isometry(poses[i]);
     const Eigen::Isometry3d ta = truth_at(truth, poses[i - 1].time);

@@ -20,7 +20,9 @@
 #include "liod/keyframe.hpp"
 #include "liod/keyframe_window.hpp"
 #include "liod/move_off.hpp"
+#include "liod/reinitialization.hpp"
 #include "liod/start_up.hpp"
+#include "liod/state_sanity.hpp"
 #include "liod/types.hpp"
 
 namespace liod {
@@ -60,7 +62,9 @@ struct OdometryResult {
 
 class LidarInertialOdometry {
  public:
-  explicit LidarInertialOdometry(const FrontEndConfig& config);
+  /// `limits`: what a plausible state is; the odometry re-initialises from one beyond them
+  /// (reinitialization.hpp). The daemon passes its pose_socket.* limits.
+  explicit LidarInertialOdometry(const FrontEndConfig& config, const StateLimits& limits = {});
 
   /// Samples must arrive in time order; out-of-order, non-finite and out-of-range ones are
   /// dropped (counted).
@@ -92,6 +96,10 @@ class LidarInertialOdometry {
   std::size_t buffered_imu_samples() const { return imu_.size(); }
   /// Scans whose IMU prediction the LiDAR contradicted beyond odometry.max_prediction_nis.
   std::size_t inconsistent_imu_scans() const { return holds_.inconsistent_scans(); }
+  /// New local maps started after an outage the prediction could not bridge (reinitialization.hpp).
+  std::size_t new_maps() const { return reinit_.new_maps(); }
+  /// Start-ups again from an implausible state.
+  std::size_t restarts() const { return reinit_.restarts(); }
 
  private:
   /// The IMU's prediction of the scan's end state from the last one.
@@ -121,6 +129,11 @@ class LidarInertialOdometry {
                                 Prediction& prediction, DeskewedFeatures& features, UpdateResult& updated);
   UpdateResult update(const Prediction& prediction, const DeskewedFeatures& features, const UpdateParams& params) const;
   void update_map(const DeskewedFeatures& features, OdometryResult& result);
+  /// Before registering a scan: a new map if the prediction left the map's registration basin.
+  void restart_map_if_lost(Prediction& prediction);
+  /// After a scan: the recovery's flag, the published covariance, and the start-up again from an
+  /// implausible state.
+  void check_recovery(OdometryResult& result);
 
   FrontEndConfig config_;
   ExtrinsicsConfig extrinsics_;
@@ -137,6 +150,7 @@ class LidarInertialOdometry {
   BiasHolds holds_;
   MoveOff move_off_;
   KeyframeWindow window_;
+  Reinitialization reinit_;
   bool initialized_ = false;
   bool map_trusted_ = false;  // the map was started afresh once the speed was known
   NavState state_;

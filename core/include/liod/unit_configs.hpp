@@ -8,6 +8,7 @@
 #include "liod/iterated_update.hpp"
 #include "liod/keyframe_window.hpp"
 #include "liod/move_off.hpp"
+#include "liod/reinitialization.hpp"
 #include "liod/start_up.hpp"
 
 namespace liod {
@@ -18,6 +19,7 @@ BiasHoldConfig bias_hold_config(const OdometryConfig& odometry);
 MoveOffConfig move_off_config(const OdometryConfig& odometry);
 UpdateParams update_params(const FrontEndConfig& config);
 /// `update`: the update's parameters (update_params), whose post model the window's post map shares.
+ReinitializationConfig reinitialization_config(const OdometryConfig& odometry, const StateLimits& limits);
 KeyframeWindowConfig keyframe_window_config(const OdometryConfig& odometry, const UpdateParams& update);
 
 }  // namespace liod
