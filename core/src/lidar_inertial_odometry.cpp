@@ -89,7 +89,9 @@ std::optional<OdometryResult> LidarInertialOdometry::process(const Scan& scan, c
 }
 
 void LidarInertialOdometry::initialize(const Scan& scan, OdometryResult& result) {
-  if (!start_up_.begin(scan, imu_, state_, covariance_)) return;
+  // After an implausible state the start-up resumes from the last plausible one.
+  if (!start_up_.begin(scan, imu_, state_, covariance_, reinit_.anchor())) return;
+  reinit_.resumed();
   if (config_.odometry.beam_calibration && beam_calibration_.beams() != scan.beam_count) {
     BeamCalibrationParams params;
     params.learn_ranges = config_.odometry.beam_range_calibration;
@@ -110,8 +112,6 @@ std::optional<OdometryResult> LidarInertialOdometry::search_start(const Scan& sc
   }
   const std::optional<StartDecision> decision = start_up_.add_scan(scan, imu_, state_);
   if (!decision) return std::nullopt;  // no pose until the speed is known
-  // After an implausible state the start-up continues from the last plausible pose.
-  if (const auto anchor = reinit_.take_anchor()) state_ = placed_at(state_, *anchor, config_.odometry.forward_axis);
   if (decision->speed) holds_.hold_forward(start_up_.start_at_speed(*decision->speed, state_, covariance_));
   const bool standstill = decision->standstill();
   move_off_.begin(standstill, state_.position);

@@ -2,7 +2,10 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
+
+#include "liod/so3.hpp"
 
 namespace liod {
 
@@ -35,16 +38,22 @@ Eigen::Matrix3d restart_covariance(StateCovariance& p) {
   return dead_reckoned;
 }
 
-NavState placed_at(const NavState& state, const NavState& anchor, const Eigen::Vector3d& forward_body) {
-  auto heading = [&](const Eigen::Matrix3d& r) {
-    const Eigen::Vector3d f = r * forward_body;
-    return std::atan2(f.y(), f.x());
-  };
-  const Eigen::Matrix3d turn = Eigen::AngleAxisd(heading(anchor.rotation) - heading(state.rotation), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+NavState placed_at(const NavState& state, const NavState& anchor, const std::deque<ImuSample>& samples) {
+  Eigen::Matrix3d rotation = anchor.rotation;
+  for (std::size_t i = 1; i < samples.size(); ++i) {
+    const double from = std::max(samples[i - 1].time, anchor.time);
+    const double to = std::min(samples[i].time, state.time);
+    if (to <= from) continue;
+    const Eigen::Vector3d rate = 0.5 * (samples[i - 1].gyro + samples[i].gyro) - anchor.gyro_bias;
+    rotation = rotation * so3::exp(rate * (to - from));
+  }
   NavState placed = state;
-  placed.rotation = turn * state.rotation;
-  placed.velocity = turn * state.velocity;
+  placed.rotation = so3::normalize(rotation);
+  placed.velocity = placed.rotation * (state.rotation.transpose() * state.velocity);
   placed.position = anchor.position;
+  placed.gravity = anchor.gravity;
+  placed.gyro_bias = anchor.gyro_bias;
+  placed.accel_bias = anchor.accel_bias;
   return placed;
 }
 
@@ -74,10 +83,5 @@ bool Reinitialization::check(const NavState& state, const StateCovariance& covar
   return false;
 }
 
-std::optional<NavState> Reinitialization::take_anchor() {
-  if (!anchor_pending_) return std::nullopt;
-  anchor_pending_ = false;
-  return last_plausible_;
-}
 
 }  // namespace liod

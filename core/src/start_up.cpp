@@ -5,6 +5,7 @@
 
 #include "liod/angles.hpp"
 #include "liod/gravity_alignment.hpp"
+#include "liod/reinitialization.hpp"
 #include "liod/speed_search.hpp"
 #include "liod/voxel_grid.hpp"
 
@@ -129,7 +130,8 @@ StartUp::StartUp(const StartUpConfig& config) : config_(config) {
   rocking_.gyro_noise_density = config.gyro_noise_density;
 }
 
-bool StartUp::begin(const Scan& scan, const ImuBuffer& imu, NavState& state, StateCovariance& covariance) {
+bool StartUp::begin(const Scan& scan, const ImuBuffer& imu, NavState& state, StateCovariance& covariance,
+                    const std::optional<NavState>& resume_from) {
   const double t_start = scan.start_time + config_.lidar_time_offset_s;
   const auto alignment = align_gravity(imu.samples(), t_start - 1.0, scan_end(scan));
   if (!alignment) return false;
@@ -138,6 +140,7 @@ bool StartUp::begin(const Scan& scan, const ImuBuffer& imu, NavState& state, Sta
   state.rotation = alignment->rotation;
   state.gyro_bias = alignment->gyro_bias;
   state.gravity = Eigen::Vector3d(0.0, 0.0, -config_.gravity_m_s2);
+  if (resume_from) state = placed_at(state, *resume_from, imu.samples());
   covariance.setZero();
   const double tilt = config_.tilt_std_deg * kDegToRad;
   covariance.diagonal().segment<3>(0) << tilt * tilt, tilt * tilt, 1e-6;  // yaw defines the world frame

@@ -378,6 +378,8 @@ void Pipeline::process_scan(OdometryLoop& loop, ScanItem& item) {
   const std::int64_t start_ns = steady_ns();
   hb_odometry_.beat(start_ns);
   const auto result = loop.odometry.process(item.scan, item.features);
+  odometry_new_maps_.store(loop.odometry.new_maps(), std::memory_order_relaxed);
+  odometry_restarts_.store(loop.odometry.restarts(), std::memory_order_relaxed);
   ++totals_.scans;
   if (!result) return;
   ++totals_.processed;
@@ -660,7 +662,8 @@ std::string Pipeline::health_json(HealthRates& rates) const {
     << "},\"odometry\":{\"scans\":" << scans << ",\"scan_rate_hz\":" << rate(scans, rates.scans)
     << ",\"last_process_ms\":" << last_process_ms_.load() << ",\"imu_poses_withheld\":" << imu_poses_withheld_.load()
     << ",\"imu_inconsistent_scans\":" << imu_inconsistent_scans_.load()
-    << ",\"implausible_poses\":" << implausible_poses_.load()
+    << ",\"implausible_poses\":" << implausible_poses_.load() << ",\"new_maps\":" << odometry_new_maps_.load()
+    << ",\"restarts\":" << odometry_restarts_.load()
     << "},\"rings\":{";
   ring("scan", scan_ring_);
   j << ',';

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 
 #include "liod/daemon/state_gate.hpp"
 #include "pipeline_run.hpp"
@@ -117,13 +118,48 @@ TEST(PublishGate, CleanDriveIsNeverImplausible) {
   EXPECT_NE(run.health.find("\"implausible_poses\":0"), std::string::npos) << run.health;
 }
 
+// The odometry does not carry an implausible state on: it starts up again (speed search) at the
+// last plausible pose (reinitialization.hpp), and its poses are ok again.
+// The new start is where the last plausible pose was, carried on by the gyro: the vehicle moved on
+// while the start-up found its speed (0.9 m here); from there the odometry tracks the motion as the
+// clean replay does (within 0.04 m over 3.5 s).
+TEST(PublishGate, ImplausibleStateRestartsTheOdometry) {
+  LIOD_REQUIRE_SIM_DRIVE(drive);
+  const auto ref = read_tum(reference_replay(*drive) / "scan.tum");
+  ASSERT_GT(ref.size(), 50U);
+  const double spike_t = ref.front().t + 4.0;
+  const PipelineRun run = run_with_accel_spike(*drive, 4.0, "100000");
+  ASSERT_EQ(run.error, "");
+  EXPECT_EQ(run.health.find("\"restarts\":0"), std::string::npos) << run.health;
+  std::size_t ok_after = 0;
+  std::optional<Eigen::Vector3d> offset;  // of the first ok pose after the restart from the clean one
+  double worst_m = 0.0;
+  for (const auto& p : run.poses) {
+    const auto& m = p.event.message;
+    if (m.type != pose::MessageType::ScanPose || !(m.flags & pose::kOk) || m.time < spike_t) continue;
+    for (const auto& r : ref) {
+      if (std::abs(r.t - m.time) > 1e-6) continue;
+      const Eigen::Vector3d d = m.position - Eigen::Vector3d(r.x, r.y, r.z);
+      if (!offset) offset = d;
+      worst_m = std::max(worst_m, (d - *offset).norm());
+      ++ok_after;
+    }
+  }
+  ASSERT_TRUE(offset.has_value()) << "no ok scan pose after the restart";
+  std::printf("[ gate ] after the restart: %zu ok scan poses, the first %.3f m from the clean replay's, the others "
+              "within %.3f m of that offset\n", ok_after, offset->norm(), worst_m);
+  EXPECT_GE(ok_after, 20U);
+  EXPECT_LT(offset->norm(), 2.0);
+  EXPECT_LT(worst_m, 0.15);
+}
+
 TEST(PublishGate, FlaggedPosesAreCountedInHealth) {
   LIOD_REQUIRE_SIM_DRIVE(drive);
   const PipelineRun run = run_with_accel_spike(*drive, 4.0, "100000");
   std::size_t implausible = 0;
   for (const auto& p : run.poses) implausible += (p.event.message.flags & pose::kImplausible) != 0;
   EXPECT_GT(implausible, 0U);
-  EXPECT_NE(run.health.find("\"implausible_poses\":" + std::to_string(implausible) + "}"), std::string::npos) << run.health;
+  EXPECT_NE(run.health.find("\"implausible_poses\":" + std::to_string(implausible) + ","), std::string::npos) << run.health;
 }
 
 namespace {

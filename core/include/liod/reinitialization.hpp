@@ -18,15 +18,18 @@
 // it, as after a rolling start) and a scan registered on that map with every direction constrained.
 //
 // A state that fails the sanity checks (state_sanity.hpp) starts the odometry from its start-up
-// again (attitude from gravity, speed search), placed at the last plausible pose.
+// again (speed search), placed at the last plausible pose: its attitude carried on by the gyro,
+// its gravity and biases (placed_at).
 
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <optional>
 
 #include "liod/error_state.hpp"
 #include "liod/state_sanity.hpp"
+#include "liod/types.hpp"
 
 namespace liod {
 
@@ -60,10 +63,13 @@ StateCovariance relative_prediction_covariance(const StateCovariance& predicted,
 /// map lies in the old one's frame.
 Eigen::Matrix3d restart_covariance(StateCovariance& covariance);
 
-/// `state` turned about the vertical and moved so that its heading and position are `anchor`'s:
-/// a start-up's state (levelled, at the origin, heading as the alignment left it) placed where
-/// the odometry was.
-NavState placed_at(const NavState& state, const NavState& anchor, const Eigen::Vector3d& forward_body);
+/// A start-up's state (levelled from the accelerometer, at the origin, heading as the alignment
+/// left it) placed where the odometry was: the anchor's attitude carried on by the gyro `samples`
+/// to the state's time, the anchor's position, gravity and biases (they passed the checks), and
+/// the start-up's velocity in the body. Levelling under way tilts by the acceleration over g (2 deg
+/// at 0.4 m/s^2), and the vertical velocity constraint takes seconds to undo that; the gyro keeps
+/// the anchor's attitude to a small fraction of it over the start-up's second.
+NavState placed_at(const NavState& state, const NavState& anchor, const std::deque<ImuSample>& samples);
 
 class Reinitialization {
  public:
@@ -88,8 +94,10 @@ class Reinitialization {
   /// After a scan: whether its state is plausible. A plausible one is kept as the anchor of a
   /// restart; an implausible one sets the anchor pending for the start-up to take.
   bool check(const NavState& state, const StateCovariance& covariance);
-  /// The last plausible state, once, for a start-up that follows an implausible one.
-  std::optional<NavState> take_anchor();
+  /// The last plausible state while a start-up that follows an implausible one has not begun.
+  std::optional<NavState> anchor() const { return anchor_pending_ ? last_plausible_ : std::nullopt; }
+  /// That start-up has begun from the anchor.
+  void resumed() { anchor_pending_ = false; }
 
   /// Where the current map lies in the frame of the first: the position covariance the new maps
   /// added (the dead reckoning's), for the published covariance.

@@ -52,8 +52,12 @@ class StartUp {
   explicit StartUp(const StartUpConfig& config);
 
   /// The first scan: the attitude from the IMU around it, the priors, and the search begins.
-  /// False while the IMU cannot tell the attitude yet.
-  bool begin(const Scan& scan, const ImuBuffer& imu, NavState& state, StateCovariance& covariance);
+  /// False while the IMU cannot tell the attitude yet. With `resume_from` (the last plausible
+  /// state before a restart) the attitude, gravity, biases and position are that state's, carried
+  /// to the scan by the gyro (placed_at): the IMU's last second may hold what made the state
+  /// implausible, and levelling under way tilts by the acceleration.
+  bool begin(const Scan& scan, const ImuBuffer& imu, NavState& state, StateCovariance& covariance,
+             const std::optional<NavState>& resume_from = std::nullopt);
   bool searching() const { return search_.has_value(); }
   /// The newest held scan's end (IMU clock), while searching.
   double held_until() const;

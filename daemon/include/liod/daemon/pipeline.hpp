@@ -257,6 +257,9 @@ class Pipeline {
   StateLimits state_limits_;
   bool scan_state_plausible_ = true;                  // odometry thread only
   std::atomic<std::uint64_t> implausible_poses_{0};   // scan and IMU-rate poses flagged implausible
+  // The odometry's re-initialisations (reinitialization.hpp): new local maps after an outage,
+  // start-ups again from an implausible state.
+  std::atomic<std::uint64_t> odometry_new_maps_{0}, odometry_restarts_{0};
   std::atomic<std::uint64_t> backend_shed_{0};        // keyframes the backend skipped, behind
   std::uint64_t backend_shed_logged_ = 0;             // backend thread only
   mutable std::mutex error_mutex_;
