@@ -42,7 +42,15 @@ struct Commands {
   CLI::App* pose = nullptr;
   liod::PoseCommandOptions pose_options;
   std::vector<std::string> pose_configs;
+  std::string pose_format = "text";
 };
+
+liod::PoseFormat pose_format(const std::string& name) {
+  if (name == "json") return liod::PoseFormat::Json;
+  if (name == "csv") return liod::PoseFormat::Csv;
+  if (name == "tum") return liod::PoseFormat::Tum;
+  return liod::PoseFormat::Text;
+}
 
 void add_offline_commands(CLI::App& app, Commands& c) {
   c.check = app.add_subcommand("check-config", "Load and validate configuration files, then exit");
@@ -81,7 +89,11 @@ void add_live_commands(CLI::App& app, Commands& c) {
   auto& p = c.pose_options;
   c.pose->add_option("--socket", p.socket, "pose socket path (default: output.pose_socket of --config, else /run/liod/pose.sock)");
   c.pose->add_option("--config", c.pose_configs, "configuration file(s) to take the socket path from")->check(CLI::ExistingFile);
-  c.pose->add_flag("--json", p.json, "JSON lines (the server's text mode)");
+  c.pose->add_option("--format", c.pose_format,
+                     "text (default): one line a pose; json: the server's JSON lines; csv: a header, then one row a pose "
+                     "(exact numbers); tum: `t x y z qx qy qz qw`, scan-rate poses only")
+      ->check(CLI::IsMember({"text", "json", "csv", "tum"}));
+  c.pose->add_flag_callback("--json", [&c] { c.pose_format = "json"; }, "the same as --format json");
   c.pose->add_flag("--scan-only", p.scan_only, "scan-rate poses only");
   c.pose->add_flag("--health", p.health, "also print health messages");
   c.pose->add_option("--count", p.count, "exit after this many poses");
@@ -105,6 +117,7 @@ int dispatch(Commands& c, const std::string& log_level) {
       c.pose_options.socket =
           c.pose_configs.empty() ? liod::Config{}.output.pose_socket : liod::load_config(c.pose_configs).output.pose_socket;
     }
+    c.pose_options.format = pose_format(c.pose_format);
     return liod::run_pose_client(c.pose_options, std::cout);
   }
   return 0;

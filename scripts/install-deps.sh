@@ -13,6 +13,8 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libstb-dev
   python3
   clang
+  dpkg-dev file systemd   # the Debian package and its check: dpkg-shlibdeps, file (CPack finds the ELF
+                          # files with it), systemd-analyze, -sysusers, -tmpfiles (scripts/check-package.sh)
 )
 # libFuzzer and the sanitizer runtimes for clang (scripts/fuzz.sh): their own package on Debian 12,
 # part of clang's packages on Ubuntu 22.04.

@@ -58,6 +58,10 @@ configure_tree release build
 cmake --build build -j"$jobs"
 stage "Release tests"
 (cd build && ctest --output-on-failure -j"$jobs")
+# The Debian package of the Release tree: built, unpacked and checked as installed (the unit
+# verified against the packaged binary, the packaged configuration checked).
+stage "Debian package"
+bash scripts/check-package.sh build
 
 # AddressSanitizer + UndefinedBehaviorSanitizer: every test (LiveVsReplay once, at recorded pace:
 # 5x pace runs the same code; not BackendLoad, which asserts that the odometry keeps the recorded

@@ -7,6 +7,7 @@
 #   asan     clang, AddressSanitizer + UndefinedBehaviorSanitizer, and the libFuzzer targets
 #            (LIOD_FUZZ): the tests and the fuzzers share one build of the libraries.
 #   tsan     clang, ThreadSanitizer.
+#   (Both build C, the pose client example in clients/, with clang too.)
 #
 # The sanitizer trees are built by clang at -O2 with line tables (-g1, enough for the reports'
 # stack traces): clang compiles the Eigen-heavy units under ASan + UBSan in about half gcc's time,
@@ -22,8 +23,8 @@ configure_tree() {
   if [ ! -f "$dir/CMakeCache.txt" ] && command -v ninja >/dev/null; then args+=(-G Ninja); fi
   case "$kind" in
     release) args+=(-DCMAKE_BUILD_TYPE=Release) ;;
-    asan) args+=(-DCMAKE_CXX_COMPILER=clang++ "${sanitizer_flags[@]}" "-DLIOD_SANITIZE=address;undefined" -DLIOD_FUZZ=ON) ;;
-    tsan) args+=(-DCMAKE_CXX_COMPILER=clang++ "${sanitizer_flags[@]}" -DLIOD_SANITIZE=thread) ;;
+    asan) args+=(-DCMAKE_CXX_COMPILER=clang++ -DCMAKE_C_COMPILER=clang "${sanitizer_flags[@]}" "-DLIOD_SANITIZE=address;undefined" -DLIOD_FUZZ=ON) ;;
+    tsan) args+=(-DCMAKE_CXX_COMPILER=clang++ -DCMAKE_C_COMPILER=clang "${sanitizer_flags[@]}" -DLIOD_SANITIZE=thread) ;;
     *) echo "configure_tree: unknown tree '$kind'" >&2; return 1 ;;
   esac
   cmake "${args[@]}" >/dev/null

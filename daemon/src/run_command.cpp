@@ -327,39 +327,81 @@ int run_daemon(const Config& config, const RunOptions& options) {
   return exit_code;
 }
 
+namespace {
+
+// The CSV columns of `liod pose --format csv`; sd_*: square roots of the covariance's diagonal.
+constexpr const char* kPoseCsvHeader =
+    "type,seq,time,x,y,z,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz,sd_x,sd_y,sd_z,sd_roll,sd_pitch,sd_yaw,flags,status\n";
+
+double pose_sd(const pose::PoseMessage& p, int i) { return std::sqrt(std::max(0.0, p.covariance(i, i))); }
+
+// One pose as `format` prints it (not Json: those lines are the server's).
+std::string format_pose(const pose::PoseMessage& p, PoseFormat format) {
+  const char* type = p.type == pose::MessageType::ScanPose ? "scan" : "imu";
+  const auto& q = p.orientation;
+  char line[1024];
+  if (format == PoseFormat::Tum) {
+    // The precision of `liod replay --trajectory` (trajectory_writer.cpp), so the files compare.
+    std::snprintf(line, sizeof line, "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", p.time, p.position.x(), p.position.y(),
+                  p.position.z(), q.x(), q.y(), q.z(), q.w());
+  } else if (format == PoseFormat::Csv) {
+    // %.17g: the exact double, for a log that is analysed later.
+    std::snprintf(line, sizeof line,
+                  "%s,%" PRIu32 ",%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,"
+                  "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%" PRIu32 ",%s\n",
+                  type, p.sequence, p.time, p.position.x(), p.position.y(), p.position.z(), q.x(), q.y(), q.z(), q.w(),
+                  p.velocity.x(), p.velocity.y(), p.velocity.z(), p.angular_rate.x(), p.angular_rate.y(), p.angular_rate.z(),
+                  pose_sd(p, 0), pose_sd(p, 1), pose_sd(p, 2), pose_sd(p, 3), pose_sd(p, 4), pose_sd(p, 5), p.flags, pose::flag_names(p.flags).c_str());
+  } else {
+    std::snprintf(line, sizeof line,
+                  "%-4s %.6f p %.3f %.3f %.3f q %.5f %.5f %.5f %.5f v %.3f %.3f %.3f w %.4f %.4f %.4f sd_xyz %.3f %.3f %.3f %s\n",
+                  type, p.time, p.position.x(), p.position.y(), p.position.z(), q.x(), q.y(), q.z(), q.w(), p.velocity.x(),
+                  p.velocity.y(), p.velocity.z(), p.angular_rate.x(), p.angular_rate.y(), p.angular_rate.z(), pose_sd(p, 0), pose_sd(p, 1),
+                  pose_sd(p, 2), pose::flag_names(p.flags).c_str());
+  }
+  return line;
+}
+
+// JSON format: the server's text lines as they come; false when the stream ended.
+bool print_json_line(PoseClient& client, const PoseCommandOptions& o, std::chrono::milliseconds timeout, std::ostream& out,
+                     long& poses) {
+  std::string l;
+  if (!client.read_line(l, timeout)) return false;
+  const bool is_health = l.rfind("{\"type\":\"health\"", 0) == 0;
+  if (is_health && !o.health) return true;
+  out << l << '\n' << std::flush;
+  if (!is_health) ++poses;
+  return true;
+}
+
+// The binary formats: one decoded message; false when the stream ended.
+bool print_message(PoseClient& client, const PoseCommandOptions& o, std::chrono::milliseconds timeout, std::ostream& out,
+                   long& poses) {
+  pose::Message m;
+  if (!client.read(m, timeout)) return false;
+  if (m.type == pose::MessageType::Health) {
+    // A TUM or CSV file holds poses only.
+    if (o.health && o.format == PoseFormat::Text) out << "health " << m.health << '\n' << std::flush;
+    return true;
+  }
+  out << format_pose(m.pose, o.format) << std::flush;
+  ++poses;
+  return true;
+}
+
+}  // namespace
+
 int run_pose_client(const PoseCommandOptions& o, std::ostream& out) {
   PoseClient client(o.socket);
-  if (o.json) client.request("json");
-  if (o.scan_only) client.request("scan");
+  if (o.format == PoseFormat::Json) client.request("json");
+  if (o.scan_only || o.format == PoseFormat::Tum) client.request("scan");
+  if (o.format == PoseFormat::Csv) out << kPoseCsvHeader;
   const auto timeout = std::chrono::milliseconds(static_cast<long>(o.timeout_s * 1000));
   long poses = 0;
-  char line[512];
   while (o.count == 0 || poses < o.count) {
-    if (o.json) {
-      std::string l;
-      if (!client.read_line(l, timeout)) break;
-      const bool is_health = l.rfind("{\"type\":\"health\"", 0) == 0;
-      if (is_health && !o.health) continue;
-      out << l << '\n' << std::flush;
-      if (!is_health) ++poses;
-      continue;
-    }
-    pose::Message m;
-    if (!client.read(m, timeout)) break;
-    if (m.type == pose::MessageType::Health) {
-      if (o.health) out << "health " << m.health << '\n' << std::flush;
-      continue;
-    }
-    const auto& p = m.pose;
-    std::snprintf(line, sizeof line,
-                  "%s %.6f p %.3f %.3f %.3f q %.5f %.5f %.5f %.5f v %.3f %.3f %.3f w %.4f %.4f %.4f sd_xyz %.3f %.3f %.3f %s\n",
-                  m.type == pose::MessageType::ScanPose ? "scan" : "imu ", p.time, p.position.x(), p.position.y(),
-                  p.position.z(), p.orientation.x(), p.orientation.y(), p.orientation.z(), p.orientation.w(),
-                  p.velocity.x(), p.velocity.y(), p.velocity.z(), p.angular_rate.x(), p.angular_rate.y(),
-                  p.angular_rate.z(), std::sqrt(std::max(0.0, p.covariance(0, 0))), std::sqrt(std::max(0.0, p.covariance(1, 1))),
-                  std::sqrt(std::max(0.0, p.covariance(2, 2))), pose::flag_names(p.flags).c_str());
-    out << line << std::flush;
-    ++poses;
+    const bool more = o.format == PoseFormat::Json ? print_json_line(client, o, timeout, out, poses)
+                                                   : print_message(client, o, timeout, out, poses);
+    if (!more) break;
   }
   if (!client.connected()) return poses > 0 ? 0 : 1;
   return 0;

@@ -18,9 +18,14 @@ struct RunOptions {
 /// Talks to systemd (READY, STATUS, WATCHDOG, STOPPING) when started by it.
 int run_daemon(const Config& config, const RunOptions& options);
 
+/// How `liod pose` prints: `text` (one line a pose, the default), `json` (the server's text mode,
+/// docs/pose-protocol.md), `csv` (a header, then one row a pose, every number exact) or `tum`
+/// (`t x y z qx qy qz qw`, scan-rate poses only: a trajectory file, as `liod replay --trajectory`).
+enum class PoseFormat { Text, Json, Csv, Tum };
+
 struct PoseCommandOptions {
   std::string socket;
-  bool json = false;         ///< ask the server for JSON lines and print them as they come
+  PoseFormat format = PoseFormat::Text;
   bool scan_only = false;
   bool health = false;       ///< also print health messages
   long count = 0;            ///< stop after this many poses (0 = until the daemon goes away)
