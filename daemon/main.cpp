@@ -95,6 +95,7 @@ void add_live_commands(CLI::App& app, Commands& c) {
       ->check(CLI::IsMember({"text", "json", "csv", "tum"}));
   c.pose->add_flag_callback("--json", [&c] { c.pose_format = "json"; }, "the same as --format json");
   c.pose->add_flag("--scan-only", p.scan_only, "scan-rate poses only");
+  c.pose->add_flag("--map-frame", p.map_frame, "tum: the map-frame poses (loop-corrected) instead of the odometry frame's");
   c.pose->add_flag("--health", p.health, "also print health messages");
   c.pose->add_option("--count", p.count, "exit after this many poses");
   c.pose->add_option("--timeout", p.timeout_s, "exit after this many seconds without a message");

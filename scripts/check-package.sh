@@ -113,6 +113,6 @@ echo "user liod (uid $uid) in groups: liod $groups; /var/lib/liod mode 750"
 echo "== clients"
 cc -std=c99 -Wall -Wextra -Wpedantic -Werror -I"$stage/usr/include" -o "$work/print_poses" \
   "$stage/usr/share/doc/liod/examples/example_print_poses.c"
-PYTHONPATH="$stage/usr/lib/python3/dist-packages" python3 -c 'import liod_pose; assert liod_pose.POSE_MESSAGE_SIZE == 304'
+PYTHONPATH="$stage/usr/lib/python3/dist-packages" python3 -c 'import liod_pose; assert liod_pose.POSE_MESSAGE_SIZE == 360'
 echo "C header and example build (C99), Python module imports"
 echo "check-package: OK ($(basename "$deb"))"

@@ -19,10 +19,11 @@
 static void print_pose(const struct liod_message* m) {
   const struct liod_pose* p = &m->pose;
   char status[256];
-  printf("%s %lu %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %lu %s\n", m->type == LIOD_MSG_SCAN_POSE ? "scan" : "imu",
-         (unsigned long)m->sequence, p->time, p->position[0], p->position[1], p->position[2], p->orientation[0],
-         p->orientation[1], p->orientation[2], p->orientation[3], (unsigned long)p->flags,
-         liod_flag_names(p->flags, status, sizeof status));
+  printf("%s %lu %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %lu %s %lu %.17g %.17g %.17g\n",
+         m->type == LIOD_MSG_SCAN_POSE ? "scan" : "imu", (unsigned long)m->sequence, p->time, p->position[0],
+         p->position[1], p->position[2], p->orientation[0], p->orientation[1], p->orientation[2], p->orientation[3],
+         (unsigned long)p->flags, liod_flag_names(p->flags, status, sizeof status),
+         (unsigned long)p->correction_sequence, p->map_position[0], p->map_position[1], p->map_position[2]);
 }
 
 int main(int argc, char** argv) {
@@ -49,7 +50,7 @@ int main(int argc, char** argv) {
   while (count == 0 || poses < count) {
     status = liod_client_read(&client, &m, 5000);
     if (status != LIOD_READ_MESSAGE) {
-      if (status == LIOD_READ_INVALID) fprintf(stderr, "%s: not a liod protocol v1 stream\n", path);
+      if (status == LIOD_READ_INVALID) fprintf(stderr, "%s: not a liod protocol v2 stream\n", path);
       if (status == LIOD_READ_TIMEOUT) fprintf(stderr, "%s: nothing for 5 s\n", path);
       break;
     }

@@ -1,5 +1,5 @@
 /*
- * liod_pose.h: a C99 client of liod's pose socket, protocol version 1 (docs/pose-protocol.md,
+ * liod_pose.h: a C99 client of liod's pose socket, protocol version 2 (docs/pose-protocol.md,
  * installed as /usr/share/doc/liod/pose-protocol.md). One header, no dependency beyond libc and
  * POSIX sockets; every function is static inline, so include it from any number of files.
  *
@@ -37,9 +37,9 @@ extern "C" {
 #endif
 
 /* Header: magic "LIOD", version, type, length of the whole message, sequence number. */
-#define LIOD_POSE_VERSION 1u
+#define LIOD_POSE_VERSION 2u
 #define LIOD_POSE_HEADER_SIZE 16u
-#define LIOD_POSE_MESSAGE_SIZE 304u
+#define LIOD_POSE_MESSAGE_SIZE 360u
 /* The largest message liod sends or a client accepts (a health message's JSON). */
 #define LIOD_POSE_MAX_MESSAGE_SIZE (1u << 20)
 #define LIOD_POSE_DEFAULT_SOCKET "/run/liod/pose.sock"
@@ -64,20 +64,24 @@ enum liod_pose_flag {
   LIOD_FLAG_IMPLAUSIBLE = 1u << 9,
   LIOD_FLAG_SWEEP_TRUNCATED = 1u << 10,
   LIOD_FLAG_CALIBRATION_CHANGED = 1u << 11,
-  LIOD_FLAG_IMU_SATURATED = 1u << 12
+  LIOD_FLAG_IMU_SATURATED = 1u << 12,
+  LIOD_FLAG_NOT_LOCALIZED = 1u << 14 /* the map-frame pose is the odometry pose: no backend */
 };
-#define LIOD_FLAG_COUNT 13
+#define LIOD_FLAG_COUNT 15
 
 /* A pose message's body (types 1 and 2), in the protocol's units and frames. */
 struct liod_pose {
   double time;            /* s, the IMU clock (Unix epoch on a synchronised vehicle) */
-  double position[3];     /* m, body (IMU) origin in the world frame */
-  double orientation[4];  /* quaternion x, y, z, w: body to world */
-  double velocity[3];     /* m/s, world frame */
+  double position[3];     /* m, body (IMU) origin in the odometry frame (continuous) */
+  double orientation[4];  /* quaternion x, y, z, w: body to odometry frame */
+  double velocity[3];     /* m/s, odometry frame */
   double angular_rate[3]; /* rad/s, body frame */
   double covariance[21];  /* upper triangle, row by row, of the 6x6 covariance of
                              [position x y z (m), rotation error x y z (rad)]: liod_pose_cov() */
   uint32_t flags;         /* enum liod_pose_flag */
+  uint32_t correction_sequence; /* +1 each time the map correction changes; 0 before the first */
+  double map_position[3];       /* m, body origin in the map frame (jumps when a loop closes) */
+  double map_orientation[4];    /* quaternion x, y, z, w: body to map frame */
 };
 
 struct liod_message {
@@ -94,7 +98,7 @@ struct liod_message {
 enum liod_decode_status {
   LIOD_DECODE_OK = 0,        /* a message was decoded; *consumed is its length */
   LIOD_DECODE_NEED_MORE = 1, /* the bytes are the start of a message: read more */
-  LIOD_DECODE_INVALID = -1   /* not a liod v1 stream: wrong magic, version, type or length */
+  LIOD_DECODE_INVALID = -1   /* not a liod v2 stream: wrong magic, version, type or length */
 };
 
 static inline uint16_t liod_get_u16le(const unsigned char* p) { return (uint16_t)(p[0] | (p[1] << 8)); }
@@ -127,7 +131,7 @@ static inline const char* liod_flag_name(int bit) {
   static const char* const names[LIOD_FLAG_COUNT] = {
       "initializing", "ok",          "degenerate",      "imu_lost",            "lidar_lost",
       "keyframe",     "few_features", "clock_jump",     "imu_inconsistent",    "implausible",
-      "sweep_truncated", "calibration_changed", "imu_saturated"};
+      "sweep_truncated", "calibration_changed", "imu_saturated", NULL,               "not_localized"};
   return bit >= 0 && bit < LIOD_FLAG_COUNT ? names[bit] : NULL;
 }
 
@@ -203,6 +207,9 @@ static inline int liod_decode(const unsigned char* bytes, size_t size, struct li
     for (i = 0; i < 3; ++i) p->angular_rate[i] = liod_get_f64le(bytes + 104 + 8 * i);
     for (i = 0; i < 21; ++i) p->covariance[i] = liod_get_f64le(bytes + 128 + 8 * i);
     p->flags = liod_get_u32le(bytes + 296);
+    p->correction_sequence = liod_get_u32le(bytes + 300);
+    for (i = 0; i < 3; ++i) p->map_position[i] = liod_get_f64le(bytes + 304 + 8 * i);
+    for (i = 0; i < 4; ++i) p->map_orientation[i] = liod_get_f64le(bytes + 328 + 8 * i);
   }
   *consumed = length;
   return LIOD_DECODE_OK;
@@ -229,7 +236,7 @@ enum liod_read_status {
   LIOD_READ_MESSAGE = 1, /* *out holds the next message */
   LIOD_READ_TIMEOUT = 0, /* no complete message within the timeout; the connection stays */
   LIOD_READ_CLOSED = -1, /* the server closed the connection, or a socket error (errno) */
-  LIOD_READ_INVALID = -2 /* the stream is not liod v1 (another version?): disconnected */
+  LIOD_READ_INVALID = -2 /* the stream is not liod v2 (another version?): disconnected */
 };
 
 /* Connects to the socket at `path` (binary mode, scan-rate and IMU-rate poses). Returns 0, or -1

@@ -32,7 +32,8 @@ def main() -> int:
                 continue
             kind = "scan" if m.type == liod_pose.MessageType.SCAN_POSE else "imu"
             numbers = " ".join(repr(v) for v in (m.time, *m.position, *m.orientation))
-            print(kind, m.sequence, numbers, m.flags, m.status, flush=True)
+            map_numbers = " ".join(repr(v) for v in m.map_position)
+            print(kind, m.sequence, numbers, m.flags, m.status, m.correction_sequence, map_numbers, flush=True)
             poses += 1
             if poses == args.count:
                 break

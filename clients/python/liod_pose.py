@@ -1,4 +1,4 @@
-"""A client of liod's pose socket, protocol version 1, using only the standard library.
+"""A client of liod's pose socket, protocol version 2, using only the standard library.
 
 The protocol is docs/pose-protocol.md (installed as /usr/share/doc/liod/pose-protocol.md)::
 
@@ -25,13 +25,14 @@ from dataclasses import dataclass
 from typing import Iterator, Optional, Tuple, Union
 
 DEFAULT_SOCKET = "/run/liod/pose.sock"
-VERSION = 1
+VERSION = 2
 MAGIC = b"LIOD"
 # magic, version, type, length of the whole message, sequence number
 HEADER = struct.Struct("<4sHHII")
-# time, position[3], orientation xyzw[4], velocity[3], angular rate[3], covariance[21], flags, reserved
-POSE_BODY = struct.Struct("<" + "d" * 35 + "II")
-POSE_MESSAGE_SIZE = HEADER.size + POSE_BODY.size  # 304
+# time, position[3], orientation xyzw[4], velocity[3], angular rate[3], covariance[21], flags,
+# correction sequence, map position[3], map orientation xyzw[4]
+POSE_BODY = struct.Struct("<" + "d" * 35 + "II" + "d" * 7)
+POSE_MESSAGE_SIZE = HEADER.size + POSE_BODY.size  # 360
 MAX_MESSAGE_SIZE = 1 << 20
 
 
@@ -57,6 +58,7 @@ class Flag(enum.IntFlag):
     SWEEP_TRUNCATED = 1 << 10
     CALIBRATION_CHANGED = 1 << 11
     IMU_SATURATED = 1 << 12
+    NOT_LOCALIZED = 1 << 14
 
 
 def flag_names(flags: int) -> str:
@@ -81,12 +83,15 @@ class PoseMessage:
     type: MessageType
     sequence: int
     time: float  # s, the IMU clock (Unix epoch on a synchronised vehicle)
-    position: Vector3  # m, body (IMU) origin in the world frame
-    orientation: Tuple[float, float, float, float]  # quaternion x, y, z, w: body to world
-    velocity: Vector3  # m/s, world frame
+    position: Vector3  # m, body (IMU) origin in the odometry frame (continuous)
+    orientation: Tuple[float, float, float, float]  # quaternion x, y, z, w: body to odometry frame
+    velocity: Vector3  # m/s, odometry frame
     angular_rate: Vector3  # rad/s, body frame
     covariance: Tuple[float, ...]  # 21 values: upper triangle, row by row, of [position, rotation error]
     flags: int
+    correction_sequence: int  # +1 each time the map correction changes; 0 before the first
+    map_position: Vector3  # m, body origin in the map frame (jumps when a loop closes)
+    map_orientation: Tuple[float, float, float, float]  # quaternion x, y, z, w: body to map frame
 
     @property
     def ok(self) -> bool:
@@ -123,12 +128,12 @@ Message = Union[PoseMessage, HealthMessage]
 
 
 class ProtocolError(Exception):
-    """The bytes are not a liod protocol version 1 stream (wrong magic, version, type or length)."""
+    """The bytes are not a liod protocol version 2 stream (wrong magic, version, type or length)."""
 
 
 def decode(buffer: Union[bytes, bytearray, memoryview]) -> Tuple[Optional[Message], int]:
     """Decodes the message at the front of `buffer`: (message, its length), or (None, 0) when the
-    buffer holds only the start of one. Raises ProtocolError on a stream that is not liod v1."""
+    buffer holds only the start of one. Raises ProtocolError on a stream that is not liod v2."""
     view = memoryview(buffer)
     prefix = bytes(view[:4])
     if prefix != MAGIC[: len(prefix)]:
@@ -161,6 +166,9 @@ def decode(buffer: Union[bytes, bytearray, memoryview]) -> Tuple[Optional[Messag
         angular_rate=(f[11], f[12], f[13]),
         covariance=tuple(f[14:35]),
         flags=f[35],
+        correction_sequence=f[36],
+        map_position=(f[37], f[38], f[39]),
+        map_orientation=(f[40], f[41], f[42], f[43]),
     )
     return pose, length
 

@@ -331,33 +331,41 @@ namespace {
 
 // The CSV columns of `liod pose --format csv`; sd_*: square roots of the covariance's diagonal.
 constexpr const char* kPoseCsvHeader =
-    "type,seq,time,x,y,z,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz,sd_x,sd_y,sd_z,sd_roll,sd_pitch,sd_yaw,flags,status\n";
+    "type,seq,time,x,y,z,qx,qy,qz,qw,vx,vy,vz,wx,wy,wz,sd_x,sd_y,sd_z,sd_roll,sd_pitch,sd_yaw,flags,status,"
+    "map_seq,map_x,map_y,map_z,map_qx,map_qy,map_qz,map_qw\n";
 
 double pose_sd(const pose::PoseMessage& p, int i) { return std::sqrt(std::max(0.0, p.covariance(i, i))); }
 
 // One pose as `format` prints it (not Json: those lines are the server's).
-std::string format_pose(const pose::PoseMessage& p, PoseFormat format) {
+std::string format_pose(const pose::PoseMessage& p, PoseFormat format, bool map_frame) {
   const char* type = p.type == pose::MessageType::ScanPose ? "scan" : "imu";
   const auto& q = p.orientation;
-  char line[1024];
+  const auto& mq = p.map_orientation;
+  char line[1536];
   if (format == PoseFormat::Tum) {
     // The precision of `liod replay --trajectory` (trajectory_writer.cpp), so the files compare.
-    std::snprintf(line, sizeof line, "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", p.time, p.position.x(), p.position.y(),
-                  p.position.z(), q.x(), q.y(), q.z(), q.w());
+    const Eigen::Vector3d& t = map_frame ? p.map_position : p.position;
+    const Eigen::Quaterniond& r = map_frame ? mq : q;
+    std::snprintf(line, sizeof line, "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", p.time, t.x(), t.y(), t.z(), r.x(),
+                  r.y(), r.z(), r.w());
   } else if (format == PoseFormat::Csv) {
     // %.17g: the exact double, for a log that is analysed later.
     std::snprintf(line, sizeof line,
                   "%s,%" PRIu32 ",%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,"
-                  "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%" PRIu32 ",%s\n",
+                  "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%" PRIu32 ",%s,%" PRIu32 ",%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n",
                   type, p.sequence, p.time, p.position.x(), p.position.y(), p.position.z(), q.x(), q.y(), q.z(), q.w(),
                   p.velocity.x(), p.velocity.y(), p.velocity.z(), p.angular_rate.x(), p.angular_rate.y(), p.angular_rate.z(),
-                  pose_sd(p, 0), pose_sd(p, 1), pose_sd(p, 2), pose_sd(p, 3), pose_sd(p, 4), pose_sd(p, 5), p.flags, pose::flag_names(p.flags).c_str());
+                  pose_sd(p, 0), pose_sd(p, 1), pose_sd(p, 2), pose_sd(p, 3), pose_sd(p, 4), pose_sd(p, 5), p.flags, pose::flag_names(p.flags).c_str(),
+                  p.correction_sequence, p.map_position.x(), p.map_position.y(), p.map_position.z(), mq.x(), mq.y(), mq.z(),
+                  mq.w());
   } else {
     std::snprintf(line, sizeof line,
-                  "%-4s %.6f p %.3f %.3f %.3f q %.5f %.5f %.5f %.5f v %.3f %.3f %.3f w %.4f %.4f %.4f sd_xyz %.3f %.3f %.3f %s\n",
+                  "%-4s %.6f p %.3f %.3f %.3f q %.5f %.5f %.5f %.5f v %.3f %.3f %.3f w %.4f %.4f %.4f sd_xyz %.3f %.3f %.3f %s "
+                  "map %.3f %.3f %.3f #%" PRIu32 "\n",
                   type, p.time, p.position.x(), p.position.y(), p.position.z(), q.x(), q.y(), q.z(), q.w(), p.velocity.x(),
                   p.velocity.y(), p.velocity.z(), p.angular_rate.x(), p.angular_rate.y(), p.angular_rate.z(), pose_sd(p, 0), pose_sd(p, 1),
-                  pose_sd(p, 2), pose::flag_names(p.flags).c_str());
+                  pose_sd(p, 2), pose::flag_names(p.flags).c_str(), p.map_position.x(), p.map_position.y(), p.map_position.z(),
+                  p.correction_sequence);
   }
   return line;
 }
@@ -384,7 +392,7 @@ bool print_message(PoseClient& client, const PoseCommandOptions& o, std::chrono:
     if (o.health && o.format == PoseFormat::Text) out << "health " << m.health << '\n' << std::flush;
     return true;
   }
-  out << format_pose(m.pose, o.format) << std::flush;
+  out << format_pose(m.pose, o.format, o.map_frame) << std::flush;
   ++poses;
   return true;
 }

@@ -146,7 +146,8 @@ std::vector<std::vector<std::string>> fields(const std::filesystem::path& file, 
 
 double number(const std::string& s) { return std::strtod(s.c_str(), nullptr); }
 
-/// The printed lines "scan|imu SEQ TIME X Y Z QX QY QZ QW FLAGS STATUS" (the examples' format)
+/// The printed lines "scan|imu SEQ TIME X Y Z QX QY QZ QW FLAGS STATUS MAP_SEQ MAP_X MAP_Y MAP_Z"
+/// (the examples' format)
 /// are the first published poses, exactly; the sequence numbers increase (health messages
 /// between poses take numbers too).
 void expect_printed_poses(const std::vector<std::vector<std::string>>& rows, const std::vector<pose::PoseMessage>& published,
@@ -158,7 +159,7 @@ void expect_printed_poses(const std::vector<std::vector<std::string>>& rows, con
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const auto& f = rows[i];
     const auto& m = published[i];
-    ASSERT_EQ(f.size(), 12U) << who << " line " << i;
+    ASSERT_EQ(f.size(), 16U) << who << " line " << i;
     EXPECT_EQ(f[0], m.type == pose::MessageType::ScanPose ? "scan" : "imu") << who << " line " << i;
     scans += f[0] == "scan" ? 1 : 0;
     EXPECT_GT(std::stol(f[1]), last_sequence) << who << " line " << i;
@@ -173,6 +174,10 @@ void expect_printed_poses(const std::vector<std::vector<std::string>>& rows, con
     EXPECT_EQ(number(f[9]), m.orientation.w()) << who << " line " << i;
     EXPECT_EQ(std::stoul(f[10]), m.flags) << who << " line " << i;
     EXPECT_EQ(f[11], pose::flag_names(m.flags)) << who << " line " << i;
+    EXPECT_EQ(std::stoul(f[12]), m.correction_sequence) << who << " line " << i;
+    EXPECT_EQ(number(f[13]), m.map_position.x()) << who << " line " << i;
+    EXPECT_EQ(number(f[14]), m.map_position.y()) << who << " line " << i;
+    EXPECT_EQ(number(f[15]), m.map_position.z()) << who << " line " << i;
   }
   // Both message types were decoded, and the vehicle moved.
   EXPECT_GT(scans, 0U) << who;

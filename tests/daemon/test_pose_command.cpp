@@ -29,6 +29,9 @@ pose::PoseMessage message(std::uint32_t i) {
   m.angular_rate = Eigen::Vector3d(0.01, -0.02, 0.3);
   for (int r = 0; r < 6; ++r) m.covariance(r, r) = 0.0004 * (r + 1);
   m.flags = pose::kOk | (i % 4 == 0 ? pose::kKeyframe : 0U);
+  m.correction_sequence = i / 2;
+  m.map_position = m.position + Eigen::Vector3d(0.25, -0.5, 0.0);
+  m.map_orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.31, Eigen::Vector3d::UnitZ()));
   return m;
 }
 
@@ -98,9 +101,10 @@ TEST(PoseCommand, TextIsTheDefault) {
   EXPECT_EQ(out[0], "health {\"version\":1}");
   EXPECT_EQ(out[1],
             "scan 1767225600.333333 p 1.500 -2.250 0.100 q 0.00000 0.00000 0.14944 0.98877 v 10.000 0.500 -0.010 "
-            "w 0.0100 -0.0200 0.3000 sd_xyz 0.020 0.028 0.035 ok|keyframe");
+            "w 0.0100 -0.0200 0.3000 sd_xyz 0.020 0.028 0.035 ok|keyframe map 1.750 -2.750 0.100 #0");
   EXPECT_EQ(out[2].rfind("imu  1767225600.433333 p 2.500 ", 0), 0U) << out[2];
-  EXPECT_EQ(out[2].substr(out[2].size() - 3), " ok");
+  const std::string tail = " ok map 2.750 -2.750 0.100 #0";
+  EXPECT_EQ(out[2].substr(out[2].size() - tail.size()), tail) << out[2];
 }
 
 TEST(PoseCommand, JsonIsTheServersTextMode) {
@@ -123,7 +127,7 @@ TEST(PoseCommand, CsvRowsAreExact) {
   const auto out = lines(run_pose(o));
   ASSERT_EQ(out.size(), 5U);
   const auto header = split(out[0], ',');
-  ASSERT_EQ(header.size(), 24U);
+  ASSERT_EQ(header.size(), 32U);
   EXPECT_EQ(header[2], "time");
   for (std::uint32_t i = 0; i < 4; ++i) {
     const auto f = split(out[i + 1], ',');
@@ -138,6 +142,9 @@ TEST(PoseCommand, CsvRowsAreExact) {
     EXPECT_EQ(std::strtod(f[16].c_str(), nullptr), std::sqrt(m.covariance(0, 0)));
     EXPECT_EQ(std::stoul(f[22]), m.flags);
     EXPECT_EQ(f[23], pose::flag_names(m.flags));
+    EXPECT_EQ(std::stoul(f[24]), m.correction_sequence);
+    EXPECT_EQ(std::strtod(f[25].c_str(), nullptr), m.map_position.x());
+    EXPECT_EQ(std::strtod(f[31].c_str(), nullptr), m.map_orientation.w());
   }
 }
 
@@ -153,6 +160,23 @@ TEST(PoseCommand, TumHasScanPosesOnly) {
     char expected[256];
     std::snprintf(expected, sizeof expected, "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f", m.time, m.position.x(),
                   m.position.y(), m.position.z(), m.orientation.x(), m.orientation.y(), m.orientation.z(), m.orientation.w());
+    EXPECT_EQ(out[k], expected);
+  }
+}
+
+TEST(PoseCommand, TumInTheMapFrame) {
+  PoseCommandOptions o;
+  o.format = PoseFormat::Tum;
+  o.map_frame = true;
+  o.count = 2;
+  const auto out = lines(run_pose(o));
+  ASSERT_EQ(out.size(), 2U);
+  for (std::size_t k = 0; k < 2; ++k) {
+    const auto m = message(static_cast<std::uint32_t>(2 * k));
+    char expected[256];
+    std::snprintf(expected, sizeof expected, "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f", m.time, m.map_position.x(),
+                  m.map_position.y(), m.map_position.z(), m.map_orientation.x(), m.map_orientation.y(),
+                  m.map_orientation.z(), m.map_orientation.w());
     EXPECT_EQ(out[k], expected);
   }
 }

@@ -28,6 +28,7 @@ struct PoseCommandOptions {
   PoseFormat format = PoseFormat::Text;
   bool scan_only = false;
   bool health = false;       ///< also print health messages
+  bool map_frame = false;    ///< tum: the map-frame poses instead of the odometry frame's
   long count = 0;            ///< stop after this many poses (0 = until the daemon goes away)
   double timeout_s = 5.0;    ///< give up after this long without a message
 };
