@@ -21,32 +21,15 @@
 #include "reference_replay.hpp"
 #include "sim_drive.hpp"
 #include "test_support.hpp"
+#include "gated_source.hpp"
 
 using namespace liod;
+using liod::test::GatedSource;
 
 namespace {
 
 constexpr long kPoses = 200;  // scan-rate and IMU-rate poses: a second of the drive and more
 
-/// A LiDAR source that waits for a go signal (bounded), so the clients connect first and see
-/// every pose from the first one.
-class GatedSource : public LidarSource {
- public:
-  GatedSource(std::unique_ptr<LidarSource> inner, const std::atomic<bool>& go) : inner_(std::move(inner)), go_(go) {}
-  void run(LidarOutput& out, const std::atomic<bool>& stop) override {
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-    while (!go_.load() && !stop.load() && std::chrono::steady_clock::now() < deadline) {
-      out.heartbeat();
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    inner_->run(out, stop);
-  }
-  std::string describe() const override { return "gated " + inner_->describe(); }
-
- private:
-  std::unique_ptr<LidarSource> inner_;
-  const std::atomic<bool>& go_;
-};
 
 /// A program found on PATH, or a path that does not exist naming what is missing.
 std::filesystem::path on_path(const std::string& name) {

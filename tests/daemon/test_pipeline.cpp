@@ -27,30 +27,13 @@
 #include "reference_replay.hpp"
 #include "sim_drive.hpp"
 #include "udp_sender.hpp"
+#include "gated_source.hpp"
 
 using namespace liod;
 using namespace liod::test;
 
 namespace {
 
-/// A LiDAR source that waits for a go signal (bounded), so clients can connect first.
-class GatedSource : public LidarSource {
- public:
-  GatedSource(std::unique_ptr<LidarSource> inner, const std::atomic<bool>& go) : inner_(std::move(inner)), go_(go) {}
-  void run(LidarOutput& out, const std::atomic<bool>& stop) override {
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-    while (!go_.load() && !stop.load() && std::chrono::steady_clock::now() < deadline) {
-      out.heartbeat();
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    inner_->run(out, stop);
-  }
-  std::string describe() const override { return "gated " + inner_->describe(); }
-
- private:
-  std::unique_ptr<LidarSource> inner_;
-  const std::atomic<bool>& go_;
-};
 
 // The scan log's filter state agrees with the trajectory written beside it: its body-frame speed
 // with the poses' differences, its gravity has the configured magnitude, its biases are a MEMS

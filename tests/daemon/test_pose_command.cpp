@@ -13,8 +13,10 @@
 #include "liod/daemon/pose_server.hpp"
 #include "liod/daemon/run_command.hpp"
 #include "test_support.hpp"
+#include "pump_server.hpp"
 
 using namespace liod;
+using liod::test::pump;
 
 // A namespace of its own: the unity build compiles this file with other tests'.
 namespace pose_command_test {
@@ -35,17 +37,6 @@ pose::PoseMessage message(std::uint32_t i) {
   return m;
 }
 
-void pump(PoseServer& server, int ms) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(ms);
-  std::vector<pollfd> fds;
-  while (std::chrono::steady_clock::now() < deadline) {
-    fds.clear();
-    server.fill_pollfds(fds);
-    ::poll(fds.data(), fds.size(), 5);
-    server.handle(fds, 0);
-    server.housekeeping();
-  }
-}
 
 // Runs `liod pose` with `options` (socket set here) while the server sends a health message and
 // messages 0..5; returns what it printed.

@@ -11,8 +11,10 @@
 #include "liod/daemon/pose_protocol.hpp"
 #include "liod/daemon/pose_server.hpp"
 #include "test_support.hpp"
+#include "pump_server.hpp"
 
 using namespace liod;
+using liod::test::pump;
 
 namespace {
 pose::PoseMessage sample_message(std::uint32_t i) {
@@ -32,18 +34,6 @@ pose::PoseMessage sample_message(std::uint32_t i) {
   return m;
 }
 
-// Pumps the server as the publisher thread would, for `ms` milliseconds.
-void pump(PoseServer& server, int ms) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(ms);
-  std::vector<pollfd> fds;
-  while (std::chrono::steady_clock::now() < deadline) {
-    fds.clear();
-    server.fill_pollfds(fds);
-    ::poll(fds.data(), fds.size(), 5);
-    server.handle(fds, 0);
-    server.housekeeping();
-  }
-}
 }  // namespace
 
 TEST(PoseProtocol, BinaryRoundTripIsExactAndLittleEndian) {
