@@ -191,6 +191,7 @@ void declare_daemon(Schema& s, DaemonConfig& c) {
   s.real("threads.backend_max_lag_s", &c.threads.backend_max_lag_s, 0.1, 3600.0);
   s.real("threads.backend_work_limit_s", &c.threads.backend_work_limit_s, 1.0, 3600.0);
   s.real("threads.scan_max_lag_s", &c.threads.scan_max_lag_s, 0.0, 3600.0);
+  s.boolean("threads.lock_memory", &c.threads.lock_memory);
 
 
   s.text("pose_socket.mode", &c.pose_socket.mode);

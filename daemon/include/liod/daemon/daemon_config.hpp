@@ -36,6 +36,9 @@ struct ThreadsConfig {
   // odometry, and that is older than pose_socket.stale_after_s, is skipped when a newer scan is
   // there: the odometry goes on with the newest (counted). One scan period at 10 Hz.
   double scan_max_lag_s = 0.1;
+  // `liod run` / `liod record`: mlockall(MCL_CURRENT | MCL_FUTURE) at start, so that no page fault
+  // to disk stalls a real-time thread (needs LimitMEMLOCK=infinity or CAP_IPC_LOCK; else a warning).
+  bool lock_memory = true;
 };
 
 struct PoseSocketConfig {
