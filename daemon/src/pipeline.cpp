@@ -137,8 +137,9 @@ void Pipeline::apply_thread_config(const ThreadConfig& tc, const char* name) {
     sched_param p{};
     p.sched_priority = tc.priority;
     if (::pthread_setschedparam(::pthread_self(), SCHED_FIFO, &p) != 0) {
-      spdlog::warn("{}: SCHED_FIFO priority {} not permitted (needs CAP_SYS_NICE or an RLIMIT_RTPRIO); normal scheduling",
-                   name, tc.priority);
+      spdlog::warn("{}: SCHED_FIFO priority {} not permitted (needs an RLIMIT_RTPRIO of at least {}: the unit's "
+                   "LimitRTPRIO); normal scheduling",
+                   name, tc.priority, tc.priority);
     }
   }
 }

@@ -16,7 +16,7 @@ struct OutputConfig {
 };
 
 struct ThreadConfig {
-  int priority = 0;  // 0 = normal scheduling; 1..99 = SCHED_FIFO priority (needs CAP_SYS_NICE)
+  int priority = 0;  // 0 = normal scheduling; 1..99 = SCHED_FIFO priority (within RLIMIT_RTPRIO, or CAP_SYS_NICE)
   int cpu = -1;      // -1 = any CPU; else pin to this CPU
 };
 
