@@ -20,8 +20,8 @@
 //   time.imu_wait_s without it. A scan's pose depends only on the IMU samples up to the first
 //   one past its end, so it does not depend on thread timing while the IMU keeps up. When the
 //   odometry falls behind (a scan's data waited longer than threads.scan_max_lag_s for it, the
-//   scan is older than pose_socket.stale_after_s, and a newer scan is there) it skips to the
-//   newest scan, counted; the IMU is fed on, so the filter predicts across the skipped scans as
+//   scan is older than pose_socket.stale_after_s, and a newer scan is there; not while it works
+//   off the start's backlog) it skips to the newest scan, counted; the IMU is fed on, so the filter predicts across the skipped scans as
 //   across a LiDAR gap. A pose that reaches the publisher more than pose_socket.stale_after_s
 //   after its input arrived is flagged stale, not ok.
 // - Replay as fast as possible (`Ordering::Lockstep`): sources run unthrottled and the rings are
