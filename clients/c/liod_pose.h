@@ -65,6 +65,7 @@ enum liod_pose_flag {
   LIOD_FLAG_SWEEP_TRUNCATED = 1u << 10,
   LIOD_FLAG_CALIBRATION_CHANGED = 1u << 11,
   LIOD_FLAG_IMU_SATURATED = 1u << 12,
+  LIOD_FLAG_STALE = 1u << 13,        /* published long after its input arrived: not ok */
   LIOD_FLAG_NOT_LOCALIZED = 1u << 14 /* the map-frame pose is the odometry pose: no backend */
 };
 #define LIOD_FLAG_COUNT 15
@@ -131,7 +132,7 @@ static inline const char* liod_flag_name(int bit) {
   static const char* const names[LIOD_FLAG_COUNT] = {
       "initializing", "ok",          "degenerate",      "imu_lost",            "lidar_lost",
       "keyframe",     "few_features", "clock_jump",     "imu_inconsistent",    "implausible",
-      "sweep_truncated", "calibration_changed", "imu_saturated", NULL,               "not_localized"};
+      "sweep_truncated", "calibration_changed", "imu_saturated", "stale",            "not_localized"};
   return bit >= 0 && bit < LIOD_FLAG_COUNT ? names[bit] : NULL;
 }
 

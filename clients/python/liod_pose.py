@@ -58,6 +58,7 @@ class Flag(enum.IntFlag):
     SWEEP_TRUNCATED = 1 << 10
     CALIBRATION_CHANGED = 1 << 11
     IMU_SATURATED = 1 << 12
+    STALE = 1 << 13
     NOT_LOCALIZED = 1 << 14
 
 

@@ -190,6 +190,8 @@ void declare_daemon(Schema& s, DaemonConfig& c) {
   s.integer("threads.keyframe_ring", &c.threads.keyframe_ring, 2, 65536);
   s.real("threads.backend_max_lag_s", &c.threads.backend_max_lag_s, 0.1, 3600.0);
   s.real("threads.backend_work_limit_s", &c.threads.backend_work_limit_s, 1.0, 3600.0);
+  s.real("threads.scan_max_lag_s", &c.threads.scan_max_lag_s, 0.0, 3600.0);
+  s.boolean("threads.lock_memory", &c.threads.lock_memory);
 
 
   s.text("pose_socket.mode", &c.pose_socket.mode);
@@ -203,6 +205,7 @@ void declare_daemon(Schema& s, DaemonConfig& c) {
   s.real("pose_socket.max_speed_mps", &c.pose_socket.max_speed_mps, 1.0, 1000.0);
   s.real("pose_socket.max_gyro_bias_rad_s", &c.pose_socket.max_gyro_bias_rad_s, 1e-4, 10.0);
   s.real("pose_socket.max_accel_bias_m_s2", &c.pose_socket.max_accel_bias_m_s2, 1e-3, 100.0);
+  s.real("pose_socket.stale_after_s", &c.pose_socket.stale_after_s, 0.001, 3600.0);
 }
 
 Schema declare_schema(Config& c) {

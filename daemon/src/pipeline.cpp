@@ -31,7 +31,7 @@ std::uint32_t status_flags(std::uint32_t odometry_status) {
 std::uint32_t with_ok(std::uint32_t f) {
   constexpr std::uint32_t kBad = pose::kInitializing | pose::kDegenerate | pose::kImuLost | pose::kLidarLost |
                                  pose::kImuInconsistent | pose::kImplausible | pose::kSweepTruncated |
-                                 pose::kCalibrationChanged | pose::kImuSaturated;
+                                 pose::kCalibrationChanged | pose::kImuSaturated | pose::kStale;
   return (f & kBad) == 0 ? f | pose::kOk : f;
 }
 
@@ -138,8 +138,9 @@ void Pipeline::apply_thread_config(const ThreadConfig& tc, const char* name) {
     sched_param p{};
     p.sched_priority = tc.priority;
     if (::pthread_setschedparam(::pthread_self(), SCHED_FIFO, &p) != 0) {
-      spdlog::warn("{}: SCHED_FIFO priority {} not permitted (needs CAP_SYS_NICE or an RLIMIT_RTPRIO); normal scheduling",
-                   name, tc.priority);
+      spdlog::warn("{}: SCHED_FIFO priority {} not permitted (needs an RLIMIT_RTPRIO of at least {}: the unit's "
+                   "LimitRTPRIO); normal scheduling",
+                   name, tc.priority, tc.priority);
     }
   }
 }
@@ -358,6 +359,15 @@ struct Pipeline::OdometryLoop {
   // held a clipped sample was predicted and deskewed with it.
   double last_saturated = -std::numeric_limits<double>::infinity();
   double previous_scan_time = -std::numeric_limits<double>::infinity();
+  // Live skipping (arrival_step): the arrival of the last IMU sample fed, the lag bound, the
+  // flags of skipped sweeps that the next scan pose carries, whether the filter has started (a
+  // pose past initializing) and since kept up (no scan waiting), and whether skips are under way.
+  std::int64_t imu_arrival_ns = 0;
+  std::int64_t max_lag_ns = 0;
+  std::uint32_t carried_flags = 0;
+  bool started = false;
+  bool kept_up = false;
+  bool skipping = false;
   void retire_front() {
     spare = std::move(pending.front());
     pending.pop_front();
@@ -369,6 +379,7 @@ void Pipeline::feed_imu(OdometryLoop& loop, const ImuItem& item) {
   ++totals_.imu_fed;
   odometry_imu_dropped_.store(loop.odometry.dropped_imu_samples(), std::memory_order_relaxed);
   loop.last_gyro = item.sample.gyro;
+  loop.imu_arrival_ns = item.arrival_steady_ns;
   if ((item.sample.flags & ImuSample::kSaturated) != 0) loop.last_saturated = item.sample.time;
   // Live, the IMU thread makes the IMU-rate poses (publish_imu_pose).
   if (loop.lockstep && loop.imu_poses && make_imu_pose(item, loop.imu_event)) push_pose(loop.imu_event);
@@ -377,6 +388,7 @@ void Pipeline::feed_imu(OdometryLoop& loop, const ImuItem& item) {
 void Pipeline::process_scan(OdometryLoop& loop, ScanItem& item) {
   const std::int64_t start_ns = steady_ns();
   hb_odometry_.beat(start_ns);
+  if (options_.before_scan) options_.before_scan(item);
   const auto result = loop.odometry.process(item.scan, item.features);
   odometry_new_maps_.store(loop.odometry.new_maps(), std::memory_order_relaxed);
   odometry_restarts_.store(loop.odometry.restarts(), std::memory_order_relaxed);
@@ -384,6 +396,7 @@ void Pipeline::process_scan(OdometryLoop& loop, ScanItem& item) {
   if (!result) return;
   ++totals_.processed;
   scans_processed_.fetch_add(1, std::memory_order_relaxed);
+  if ((result->status & (kStatusInitializing | kStatusSpeedUnknown)) == 0) loop.started = true;
   const double ms = result->deskew_ms + item.features_ms + result->registration_ms;
   totals_.front_end_ms.push_back(ms);
   last_process_ms_.store(ms + result->map_ms, std::memory_order_relaxed);
@@ -401,6 +414,8 @@ void Pipeline::process_scan(OdometryLoop& loop, ScanItem& item) {
   if (item.clock_jump) f |= pose::kClockJump;
   if (item.sweep_truncated) f |= pose::kSweepTruncated;
   if (item.calibration_changed) f |= pose::kCalibrationChanged;
+  f |= loop.carried_flags;  // from sweeps skipped since the last scan pose
+  loop.carried_flags = 0;
   if (loop.last_saturated > loop.previous_scan_time) f |= pose::kImuSaturated;
   loop.previous_scan_time = result->state.time;
   ev.message.flags = with_ok(f);
@@ -469,11 +484,18 @@ bool Pipeline::arrival_step(OdometryLoop& loop, bool& done) {
   }
   auto process_ready = [&]() {
     while (!loop.pending.empty()) {
-      const double end = loop.odometry.scan_end_time(loop.pending.front().scan);
+      const ScanItem& front = loop.pending.front();
+      const double end = loop.odometry.scan_end_time(front.scan);
       const bool imu_there = loop.odometry.latest_imu_time() >= end;
-      const bool waited = steady_ns() - loop.pending.front().ready_steady_ns > loop.imu_wait_ns;
+      const bool waited = steady_ns() - front.ready_steady_ns > loop.imu_wait_ns;
       if (!imu_there && !waited && !imu_ring_.drained()) break;
-      process_scan(loop, loop.pending.front());
+      // When the scan's data was all there: the sweep, and the IMU up to its end (the sample
+      // that took it there is the last one fed, or an earlier one: then this is later than the
+      // truth and the lag found shorter), or the end of its wait for the IMU. A late IMU is
+      // the IMU's delay, not the odometry's, and never makes it skip.
+      const std::int64_t complete = imu_there ? std::max(front.ready_steady_ns, loop.imu_arrival_ns)
+                                              : front.ready_steady_ns + loop.imu_wait_ns;
+      if (!skip_if_behind(loop, complete)) process_scan(loop, loop.pending.front());
       loop.retire_front();
       progress = true;
     }
@@ -488,12 +510,54 @@ bool Pipeline::arrival_step(OdometryLoop& loop, bool& done) {
   return progress;
 }
 
+// A scan that can only come out stale (older than pose_socket.stale_after_s already), with a
+// newer scan there, is skipped when the odometry is what holds it up: its data (sweep, and IMU up
+// to its end) has waited longer than threads.scan_max_lag_s for it. Working through the backlog
+// instead, a slow odometry (a loaded CPU, a large map update) publishes ever older poses, 16 scans
+// deep with the ring full. A one-off slow scan (the start-up search registers the scans it held in
+// one call: 0.22 s on the test drive) leaves a backlog younger than the stale bound, worked off
+// scan by scan; a late IMU alone (the scans wait for it) never skips, or a steady IMU delay beyond
+// the bound would skip every scan but the newest. The IMU is fed on, so the next scan is predicted
+// across a skipped one as across a LiDAR gap, and the flags of what happened in its sweep pass
+// to the next scan pose. Nothing is skipped before the odometry has kept up once after the
+// filter started: the first scans of a process cost the most (page faults, the first map, the
+// start-up search registering its held scans at once: 0.65 s in a fresh `liod run` on the test
+// machine, loaded), their poses are initializing (no controller uses them), and that backlog is
+// worked off once.
+bool Pipeline::skip_if_behind(OdometryLoop& loop, std::int64_t complete_ns) {
+  const std::int64_t now = steady_ns();
+  const ScanItem& front = loop.pending.front();
+  const bool newer = loop.pending.size() > 1 || scan_ring_.front() != nullptr;
+  const double age_s = static_cast<double>(now - (front.ready_steady_ns - front.queued_ns)) * 1e-9;
+  if (!newer && loop.started) loop.kept_up = true;  // nothing waits behind this scan
+  if (!newer && loop.skipping) {
+    spdlog::info("odometry caught up: {} scans skipped so far", scans_skipped_.load());
+    loop.skipping = false;
+  }
+  if (!loop.kept_up || !newer || now - complete_ns <= loop.max_lag_ns || age_s <= config_.pose_socket.stale_after_s) {
+    return false;
+  }
+  if (front.clock_jump) loop.carried_flags |= pose::kClockJump;
+  if (front.sweep_truncated) loop.carried_flags |= pose::kSweepTruncated;
+  if (front.calibration_changed) loop.carried_flags |= pose::kCalibrationChanged;
+  scans_skipped_.fetch_add(1, std::memory_order_relaxed);
+  if (!loop.skipping) {
+    spdlog::warn("odometry behind: the scan ending at t={:.3f} waited {:.0f} ms for it and arrived {:.0f} ms ago "
+                 "(threads.scan_max_lag_s {} s, pose_socket.stale_after_s {} s); skipping to the newest scan",
+                 loop.odometry.scan_end_time(front.scan), static_cast<double>(now - complete_ns) * 1e-6, age_s * 1e3,
+                 config_.threads.scan_max_lag_s, config_.pose_socket.stale_after_s);
+    loop.skipping = true;
+  }
+  return true;
+}
+
 void Pipeline::odometry_thread() {
   apply_thread_config(config_.threads.odometry, "liod-odometry");
   OdometryLoop loop(config_);
   loop.lockstep = options_.ordering == Ordering::Lockstep;
   loop.imu_poses = options_.imu_rate_poses;
   loop.imu_wait_ns = static_cast<std::int64_t>(config_.time.imu_wait_s * 1e9);
+  loop.max_lag_ns = static_cast<std::int64_t>(config_.threads.scan_max_lag_s * 1e9);
   while (!stop_.load(std::memory_order_relaxed)) {
     hb_odometry_.beat(steady_ns());
     bool done = false;
@@ -502,6 +566,7 @@ void Pipeline::odometry_thread() {
     if (!progress) odometry_wakeup_.wait(std::chrono::milliseconds(loop.lockstep ? 1 : 5));
   }
   totals_.imu_dropped = loop.odometry.dropped_imu_samples();
+  totals_.skipped = scans_skipped_.load();
   pose_ring_.close();
   keyframe_ring_.close();
 }
@@ -524,6 +589,7 @@ void Pipeline::publisher_thread(PoseServer* server) {
     if (server != nullptr) server->handle(fds, 1);
     // Scan poses first: each ring is in order, and neither may wait for the other.
     while (pose_ring_.try_pop(ev) || imu_pose_ring_.try_pop(ev)) {
+      flag_stale(ev, steady_ns());
       for (const auto& sink : sinks_) sink(ev);
       const bool scan = ev.message.type == pose::MessageType::ScanPose;
       if (server != nullptr) server->broadcast(ev.message);
@@ -553,6 +619,16 @@ void Pipeline::publisher_thread(PoseServer* server) {
     }
     if (pose_ring_.drained() && imu_pose_ring_.drained()) break;
   }
+}
+
+// A pose is right for its `time`, but a controller uses the newest one as the present: published
+// this late it is off by whatever the vehicle did meanwhile. The replay in lockstep has no arrival
+// clock (and must not depend on thread timing).
+void Pipeline::flag_stale(PoseEvent& ev, std::int64_t now) {
+  if (options_.ordering == Ordering::Lockstep || ev.input_steady_ns <= 0) return;
+  if (static_cast<double>(now - ev.input_steady_ns) * 1e-9 <= config_.pose_socket.stale_after_s) return;
+  ev.message.flags = (ev.message.flags | pose::kStale) & ~static_cast<std::uint32_t>(pose::kOk);
+  stale_poses_.fetch_add(1, std::memory_order_relaxed);
 }
 
 void Pipeline::backend_thread() {
@@ -662,6 +738,7 @@ std::string Pipeline::health_json(HealthRates& rates) const {
     << "},\"odometry\":{\"scans\":" << scans << ",\"scan_rate_hz\":" << rate(scans, rates.scans)
     << ",\"last_process_ms\":" << last_process_ms_.load() << ",\"imu_poses_withheld\":" << imu_poses_withheld_.load()
     << ",\"imu_inconsistent_scans\":" << imu_inconsistent_scans_.load()
+    << ",\"scans_skipped\":" << scans_skipped_.load() << ",\"stale_poses\":" << stale_poses_.load()
     << ",\"implausible_poses\":" << implausible_poses_.load() << ",\"new_maps\":" << odometry_new_maps_.load()
     << ",\"restarts\":" << odometry_restarts_.load()
     << "},\"rings\":{";

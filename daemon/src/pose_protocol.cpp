@@ -94,7 +94,7 @@ void encode_health(const std::string& json, std::uint32_t sequence, std::vector<
 std::string flag_names(std::uint32_t flags) {
   static const char* kNames[] = {"initializing", "ok",           "degenerate", "imu_lost",        "lidar_lost",
                                  "keyframe",     "few_features", "clock_jump", "imu_inconsistent", "implausible",
-                                 "sweep_truncated", "calibration_changed", "imu_saturated", "",
+                                 "sweep_truncated", "calibration_changed", "imu_saturated", "stale",
                                  "not_localized"};
   std::string s;
   for (int i = 0; i < static_cast<int>(std::size(kNames)); ++i) {

@@ -1,16 +1,22 @@
 #include "liod/daemon/run_command.hpp"
 
+#include <linux/capability.h>
 #include <poll.h>
 #include <signal.h>
 #include <spdlog/spdlog.h>
+#include <sys/mman.h>
+#include <sys/resource.h>
 #include <sys/signalfd.h>
+#include <sys/syscall.h>
 #include <systemd/sd-daemon.h>
 #include <unistd.h>
 
 #include <array>
+#include <cerrno>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <ostream>
 #include <thread>
@@ -261,6 +267,42 @@ std::unique_ptr<drivers::PpsDiscipline> open_pps(const Config& config) {
   }
 }
 
+bool has_cap_ipc_lock() {
+  __user_cap_header_struct header{_LINUX_CAPABILITY_VERSION_3, 0};
+  __user_cap_data_struct data[2]{};
+  if (::syscall(SYS_capget, &header, data) != 0) return false;
+  return (data[CAP_IPC_LOCK / 32].effective & (1U << (CAP_IPC_LOCK % 32))) != 0;
+}
+
+// A page fault on a real-time thread's path (a stack or heap page touched for the first time, a
+// page reclaimed under memory pressure) stalls the thread for as long as the kernel takes to
+// supply it; mlockall keeps every page resident. With MCL_FUTURE each later mapping is locked
+// too and counted against RLIMIT_MEMLOCK: under a finite limit without CAP_IPC_LOCK an allocation
+// past it would fail (mmap EAGAIN), so memory is locked only where the limit is unlimited (the
+// unit's LimitMEMLOCK=infinity) or CAP_IPC_LOCK lifts it. Anything else is a warning: liod runs
+// on with pageable memory.
+void lock_memory(const ThreadsConfig& threads) {
+  if (!threads.lock_memory) {
+    spdlog::info("memory not locked (threads.lock_memory: false)");
+    return;
+  }
+  rlimit limit{};
+  ::getrlimit(RLIMIT_MEMLOCK, &limit);
+  if (limit.rlim_cur != RLIM_INFINITY && !has_cap_ipc_lock()) {
+    spdlog::warn("memory not locked: RLIMIT_MEMLOCK is {} KiB and no CAP_IPC_LOCK (the unit's LimitMEMLOCK=infinity "
+                 "lifts it); page faults may stall the real-time threads",
+                 limit.rlim_cur / 1024);
+    return;
+  }
+  if (::mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
+    const int error = errno;
+    spdlog::warn("mlockall failed: {}; memory not locked, page faults may stall the real-time threads",
+                 std::strerror(error));
+    return;
+  }
+  spdlog::info("memory locked (mlockall MCL_CURRENT | MCL_FUTURE)");
+}
+
 /// Waits for SIGTERM/SIGINT, a thread's error or the time limit; returns the exit code so far.
 int supervise(const SignalFd& signals, Pipeline& pipeline, Supervisor& supervisor, double max_seconds) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
@@ -286,6 +328,7 @@ int supervise(const SignalFd& signals, Pipeline& pipeline, Supervisor& superviso
 }  // namespace
 
 int run_daemon(const Config& config, const RunOptions& options) {
+  lock_memory(config.threads);
   SignalFd signals;
   std::unique_ptr<Recorder> recorder;
   if (!options.record_dir.empty()) {

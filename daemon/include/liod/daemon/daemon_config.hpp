@@ -16,7 +16,7 @@ struct OutputConfig {
 };
 
 struct ThreadConfig {
-  int priority = 0;  // 0 = normal scheduling; 1..99 = SCHED_FIFO priority (needs CAP_SYS_NICE)
+  int priority = 0;  // 0 = normal scheduling; 1..99 = SCHED_FIFO priority (within RLIMIT_RTPRIO, or CAP_SYS_NICE)
   int cpu = -1;      // -1 = any CPU; else pin to this CPU
 };
 
@@ -32,6 +32,13 @@ struct ThreadsConfig {
   int keyframe_ring = 64;
   double backend_max_lag_s = 5.0;      // live: a keyframe that waited longer for the backend is skipped (no loop check)
   double backend_work_limit_s = 60.0;  // one keyframe's backend work running longer than this is a stall (watchdog)
+  // Live: a scan whose data (sweep, and IMU up to its end) has waited longer than this for the
+  // odometry, and that is older than pose_socket.stale_after_s, is skipped when a newer scan is
+  // there: the odometry goes on with the newest (counted). One scan period at 10 Hz.
+  double scan_max_lag_s = 0.1;
+  // `liod run` / `liod record`: mlockall(MCL_CURRENT | MCL_FUTURE) at start, so that no page fault
+  // to disk stalls a real-time thread (needs LimitMEMLOCK=infinity or CAP_IPC_LOCK; else a warning).
+  bool lock_memory = true;
 };
 
 struct PoseSocketConfig {
@@ -46,6 +53,7 @@ struct PoseSocketConfig {
   double max_speed_mps = 100.0;     // a faster state is implausible, not ok
   double max_gyro_bias_rad_s = 0.1; // a larger gyro bias (any axis) is implausible, not ok
   double max_accel_bias_m_s2 = 1.0; // a larger accelerometer bias (any axis) is implausible, not ok
+  double stale_after_s = 0.3;       // live: a pose published later than this after its input arrived is stale, not ok
 };
 
 /// Everything the daemon's own parts need.

@@ -18,7 +18,12 @@
 //   each sample into an IMU-rate pose (the last scan update propagated, ImuRatePropagator), so
 //   those never wait behind a scan update. A scan is processed as soon as the IMU has reached its end time, or after
 //   time.imu_wait_s without it. A scan's pose depends only on the IMU samples up to the first
-//   one past its end, so it does not depend on thread timing while the IMU keeps up.
+//   one past its end, so it does not depend on thread timing while the IMU keeps up. When the
+//   odometry falls behind (a scan's data waited longer than threads.scan_max_lag_s for it, the
+//   scan is older than pose_socket.stale_after_s, and a newer scan is there; not while it works
+//   off the start's backlog) it skips to the newest scan, counted; the IMU is fed on, so the filter predicts across the skipped scans as
+//   across a LiDAR gap. A pose that reaches the publisher more than pose_socket.stale_after_s
+//   after its input arrived is flagged stale, not ok.
 // - Replay as fast as possible (`Ordering::Lockstep`): sources run unthrottled and the rings are
 //   lossless (producers wait for room), and the odometry consumes in data order exactly like the
 //   original single-threaded loop: before a scan, IMU samples up to its end + 20 ms; the scan is
@@ -134,11 +139,14 @@ struct PipelineOptions {
   bool bridge_clock_steps = false;
   /// Handed to the BackendWorker (tests: a slow backend).
   BackendWorkerOptions backend;
+  /// Called on the odometry thread as it starts on each scan (tests: a slow odometry).
+  std::function<void(const ScanItem&)> before_scan;
 };
 
 /// Totals for the replay summary (valid after join()).
 struct OdometryTotals {
   std::size_t scans = 0, processed = 0, keyframes = 0, degenerate = 0, imu_fed = 0, imu_dropped = 0;
+  std::size_t skipped = 0;  ///< live: scans skipped with the odometry behind (threads.scan_max_lag_s)
   std::vector<double> front_end_ms;
 };
 
@@ -201,6 +209,13 @@ class Pipeline {
   void process_scan(OdometryLoop& loop, ScanItem& item);
   bool lockstep_step(OdometryLoop& loop, bool& done);
   bool arrival_step(OdometryLoop& loop, bool& done);
+  /// Live: whether the odometry is behind on the front scan, whose data was complete at
+  /// `complete_ns`, and the scan can only come out stale; if so it is skipped (counted, logged
+  /// when a run of skips begins).
+  bool skip_if_behind(OdometryLoop& loop, std::int64_t complete_ns);
+  /// Live: flags `ev` stale (and not ok) when it reaches the publisher at `now` more than
+  /// pose_socket.stale_after_s after its input arrived.
+  void flag_stale(PoseEvent& ev, std::int64_t now);
   void publisher_thread(PoseServer* server);
   void backend_thread();
   /// One keyframe on the backend thread: its loop search, solve and state files, or shed.
@@ -260,6 +275,8 @@ class Pipeline {
   // The odometry's re-initialisations (reinitialization.hpp): new local maps after an outage,
   // start-ups again from an implausible state.
   std::atomic<std::uint64_t> odometry_new_maps_{0}, odometry_restarts_{0};
+  std::atomic<std::uint64_t> scans_skipped_{0};       // live: the odometry behind (threads.scan_max_lag_s)
+  std::atomic<std::uint64_t> stale_poses_{0};         // flagged stale (pose_socket.stale_after_s)
   std::atomic<std::uint64_t> backend_shed_{0};        // keyframes the backend skipped, behind
   std::uint64_t backend_shed_logged_ = 0;             // backend thread only
   mutable std::mutex error_mutex_;
