@@ -29,9 +29,9 @@ void sleep_while(const std::atomic<bool>& slow, double seconds) {
 
 // Every keyframe's backend work takes 5 s (a loop check on a loaded machine, a slow disk's
 // fsync) while the drive plays live; the watchdog's view of the threads is polled every 100 ms, as
-// `liod run` does. The drive plays at half its recorded pace: the odometry itself must keep the
-// pace for its poses to equal the replay's, and a test machine running other tests beside this
-// one leaves it less than the vehicle's computer does.
+// `liod run` does, for a minute: the 8 s drive plays at an eighth of its recorded pace. (The
+// odometry itself must keep the pace for its poses to equal the replay's, and a test machine
+// running other tests beside this one leaves it less than the vehicle's computer does.)
 TEST(BackendLoad, SlowBackendNeitherStallsTheWatchdogNorTouchesTheOdometry) {
   LIOD_REQUIRE_SIM_DRIVE(drive);
   const auto ref = read_tum(reference_replay(*drive) / "scan.tum");
@@ -44,7 +44,7 @@ TEST(BackendLoad, SlowBackendNeitherStallsTheWatchdogNorTouchesTheOdometry) {
   std::atomic<bool> slow{true};
   std::atomic<int> slow_units{0};
   std::vector<std::string> stalls;
-  constexpr double kPace = 0.5;
+  const double kPace = (ref.back().t - ref.front().t) / 60.0;
   const double drive_s = (ref.back().t - ref.front().t) / kPace;
   const auto started = std::chrono::steady_clock::now();
   const PipelineRun run = run_pipeline(
@@ -67,7 +67,7 @@ TEST(BackendLoad, SlowBackendNeitherStallsTheWatchdogNorTouchesTheOdometry) {
   ASSERT_EQ(run.error, "");
   std::printf("[ backend ] %d keyframes took 5 s each; health %s\n", slow_units.load(),
               run.health.substr(run.health.find("\"backend\"")).c_str());
-  EXPECT_GE(slow_units.load(), 2);
+  EXPECT_GE(slow_units.load(), 10);  // a minute of 5 s units
   EXPECT_TRUE(stalls.empty()) << stalls.size() << " stalled observations, first: " << (stalls.empty() ? "" : stalls.front());
   EXPECT_EQ(run.health.find("\"keyframes_shed\":0,"), std::string::npos) << run.health;
   EXPECT_NE(run.health.find("\"keyframes_shed\":"), std::string::npos) << run.health;
