@@ -160,14 +160,16 @@ class LiveDaemon {
         difop(static_cast<std::uint16_t>(msop + 1)), drive_(drive), record_dir_(record_dir),
         file_size_limit_(file_size_limit) {
     // lock_memory off: a test never pins its memory on a machine it shares (that is for `liod run`
-    // on the vehicle).
+    // on the vehicle). No skipping of scans when the odometry falls behind (scan_max_lag_s): these
+    // tests compare every scan with the replay's, on a test machine that may be slower than the
+    // vehicle's (Overload.* tests the skipping).
     std::ofstream cfg(config_file());
     cfg << "lidar: {msop_port: " << msop << ", difop_port: " << difop << "}\n"
         << "drivers:\n  lidar: {bind_address: 127.0.0.1}\n  imu: {transport: file, file: \"" << (drive / "imu.csv").string()
         << "\", file_pace: " << pace << "}\n"
         << "time: {lidar_clock: sensor, imu_wait_s: 2.0}\n"
         << "threads: {lidar: {priority: 0}, imu: {priority: 0}, odometry: {priority: 0}, publisher: {priority: 0}, scan_ring: 256, "
-        << "lock_memory: false}\n"
+        << "lock_memory: false, scan_max_lag_s: 3600}\n"
         << "output: {pose_socket: \"" << sock << "\"}\n"
         << "pose_socket: {health_interval_s: 0.2, client_buffer_bytes: 8388608}\n";
   }
