@@ -14,3 +14,5 @@ if(LIOD_BUILD_TESTS)
   find_package(benchmark REQUIRED)
 endif()
 # Ceres is found where it is used (the backend library), to keep its slow headers contained.
+# PCL only for the map's PCD (daemon/src/map_export.cpp, the one unit that includes it).
+find_package(PCL QUIET REQUIRED COMPONENTS common io)

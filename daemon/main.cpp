@@ -9,6 +9,7 @@
 #include "liod/config.hpp"
 #include "liod/daemon/decode_command.hpp"
 #include "liod/daemon/logging.hpp"
+#include "liod/daemon/map_export.hpp"
 #include "liod/daemon/replay.hpp"
 #include "liod/daemon/run_command.hpp"
 
@@ -43,6 +44,8 @@ struct Commands {
   liod::PoseCommandOptions pose_options;
   std::vector<std::string> pose_configs;
   std::string pose_format = "text";
+  CLI::App* map_export = nullptr;
+  liod::MapExportOptions map_export_options;
 };
 
 liod::PoseFormat pose_format(const std::string& name) {
@@ -73,6 +76,19 @@ void add_offline_commands(CLI::App& app, Commands& c) {
   r.progress = true;
   c.replay->add_option("--pace", r.pace, "replay at this multiple of the recorded pace (1 = as recorded); default: as fast as possible, deterministic")->check(CLI::Range(0.0, 1000.0));
   c.replay->add_option("--pose-socket", r.pose_socket, "also serve the poses on this Unix socket (see docs/pose-protocol.md)");
+}
+
+void add_map_commands(CLI::App& app, Commands& c) {
+  CLI::App* map = app.add_subcommand("map", "Work with a state directory's map (backend.persist)");
+  map->require_subcommand(1);
+  c.map_export = map->add_subcommand("export", "Write the global map of every run in a state directory as a binary PCD");
+  auto& m = c.map_export_options;
+  m.voxel_m = liod::BackendConfig{}.map_voxel_m;
+  c.map_export->add_option("--state", m.state_dir, "state directory (output.state_dir)")->required()->check(CLI::ExistingDirectory);
+  c.map_export->add_option("--out", m.out, "output PCD file")->required();
+  c.map_export->add_option("--voxel", m.voxel_m, "voxel size of the merged map in m; 0 = every stored point")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 100.0));
 }
 
 void add_live_commands(CLI::App& app, Commands& c) {
@@ -110,6 +126,7 @@ liod::Config load(const std::vector<std::string>& paths, const std::string& log_
 int dispatch(Commands& c, const std::string& log_level) {
   if (*c.check) return check_config(c.check_paths);
   if (*c.decode) return liod::run_decode(c.decode_options, std::cout);
+  if (*c.map_export) return liod::run_map_export(c.map_export_options, std::cout);
   if (*c.replay) return liod::run_replay(load(c.replay_configs, log_level), c.replay_options, std::cout);
   if (*c.run) return liod::run_daemon(load(c.run_configs, log_level), c.run_options);
   if (*c.record) return liod::run_daemon(load(c.record_configs, log_level), c.record_options);
@@ -135,6 +152,7 @@ int main(int argc, char** argv) {
   Commands commands;
   add_offline_commands(app, commands);
   add_live_commands(app, commands);
+  add_map_commands(app, commands);
   CLI11_PARSE(app, argc, argv);
 
   try {

@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
-# Installs liod's build and test dependencies from Debian/Ubuntu packages. (PCD files and pcap
-# captures are read and written by liod's own small code, so PCL and libpcap are not needed.)
+# Installs liod's build and test dependencies from Debian/Ubuntu packages. (The global map's PCD
+# is written with PCL, so that PCL and CloudCompare read it as they expect; pcap captures and the
+# decoder's sweep PCDs are liod's own small code, so libpcap is not needed.)
 # Idempotent: packages already present are skipped; safe to run again.
 set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config git
-  libeigen3-dev libceres-dev
+  libeigen3-dev libceres-dev libpcl-dev
   libspdlog-dev libfmt-dev libyaml-cpp-dev
   libgpiod-dev libsystemd-dev
   libcli11-dev nlohmann-json3-dev

@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "liod/backend/map_store.hpp"
+#include "liod/daemon/map_export.hpp"
 
 #include "liod/daemon/percentile.hpp"
 
@@ -41,14 +42,30 @@ void remove_orphaned_scratch(const std::filesystem::path& parent, std::string_vi
   }
 }
 
+// The state directory's writer when persisting. A directory whose state cannot be read is left as
+// it is (nothing of it is overwritten) and this run does not persist: the daemon still runs.
+std::unique_ptr<StateWriter> open_state(const Config& config) {
+  if (!config.backend.persist) return nullptr;
+  try {
+    auto writer = std::make_unique<StateWriter>(config.output.state_dir);
+    for (const auto& note : writer->graph().notes) spdlog::warn("backend state: {}", note);
+    spdlog::info("backend state in {}: {} keyframes from {} earlier run(s); this run is run {}, its keyframe ids start at {}",
+                 config.output.state_dir, writer->graph().nodes.size(), writer->run(), writer->run(), writer->first_keyframe_id());
+    return writer;
+  } catch (const StateError& e) {
+    spdlog::error("backend state not used, this run does not persist: {} (move the directory aside to start a new one)", e.what());
+    return nullptr;
+  }
+}
+
 // Where keyframe clouds beyond backend.memory_keyframes go. Persisting: the state directory's
-// keyframe files, which graph.bin lists anyway (each keyframe is written once). Otherwise a
+// keyframe files, which the graph names anyway (each keyframe is written once). Otherwise a
 // scratch directory under the state directory when it exists, else under the temp directory (a
 // replay as an ordinary user usually cannot write /var/lib/liod), removed at exit; if neither can be created
 // every cloud stays in memory (the backend works, only the memory bound is lost).
-std::shared_ptr<KeyframeSpill> make_spill(const Config& config) {
+std::shared_ptr<KeyframeSpill> make_spill(const Config& config, bool persisting) {
   namespace fs = std::filesystem;
-  if (config.backend.persist) {
+  if (persisting) {
     return std::make_shared<KeyframeDirectory>(config.output.state_dir, KeyframeDirectory::Kind::kState);
   }
   if (config.backend.memory_keyframes == 0) return nullptr;
@@ -77,9 +94,10 @@ std::shared_ptr<KeyframeSpill> make_spill(const Config& config) {
 BackendWorker::BackendWorker(const Config& config, BackendWorkerOptions options)
     : config_(config),
       options_(std::move(options)),
-      // The writer first: it clears the temp files a crash left in the state directory.
-      writer_(config.backend.persist ? std::make_unique<StateWriter>(config.output.state_dir) : nullptr),
-      backend_(config, make_spill(config)) {}
+      // The writer first: it clears the temp files a crash left in the state directory and
+      // knows the first keyframe id that earlier runs left free.
+      writer_(open_state(config)),
+      backend_(config, make_spill(config, writer_ != nullptr), writer_ ? writer_->first_keyframe_id() : 0) {}
 
 BackendWorker::~BackendWorker() = default;
 
@@ -120,18 +138,21 @@ bool BackendWorker::process(const Keyframe& keyframe) {
 }
 
 void BackendWorker::save_state() {
-  // graph.bin is the commit point and may only name complete keyframe files: after a keyframe
-  // failed to reach the state directory the last committed state stays.
+  // The graph may only name complete keyframe files: after a keyframe failed to reach the state
+  // directory the last committed state stays.
+  if (state_frozen_) return;
   const KeyframeStore& kf = backend_.keyframes();
   if (kf.spill_failures() > 0) {
-    if (!state_frozen_) spdlog::warn("backend state no longer saved: a keyframe could not be written to {}", config_.output.state_dir);
+    spdlog::warn("backend state no longer saved: a keyframe could not be written to {}", config_.output.state_dir);
     state_frozen_ = true;
     return;
   }
   try {
     writer_->save_graph(kf.ids(), backend_.graph());
   } catch (const StateError& e) {
-    spdlog::warn("backend state not saved: {}", e.what());
+    // The writer saves nothing more after a failure (its journal keeps the last commit).
+    spdlog::warn("backend state no longer saved: {}", e.what());
+    state_frozen_ = true;
   }
 }
 
@@ -139,8 +160,10 @@ void BackendWorker::finish() {
   if (!writer_) return;
   save_state();
   try {
+    if (!state_frozen_) writer_->flush();
+    // This run's map only (the backend's keyframes); `liod map export` merges every run.
     write_map_pcd(writer_->directory() / "map.pcd", backend_.global_map(config_.backend.map_voxel_m));
-  } catch (const StateError& e) {
+  } catch (const std::exception& e) {
     spdlog::warn("backend state not saved: {}", e.what());
   }
 }

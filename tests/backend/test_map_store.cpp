@@ -1,6 +1,6 @@
-// State persistence: round trip, corrupt/partial files named in the error, a crash mid-write
-// (temp file left behind) still loads the last good state, and SIGKILL at random points during
-// repeated saves always leaves a loadable directory.
+// State persistence: round trip, crash debris ignored, corrupt/missing files named, runs that
+// share a directory keep each other's keyframes, and SIGKILL at random points during repeated
+// runs' saves always leaves a loadable directory that never loses a commit.
 
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -13,56 +13,28 @@
 #include <random>
 #include <thread>
 
-#include "liod/backend/map_store.hpp"
-#include "scratch_dir.hpp"
+#include "state_fixture.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace liod;
-
-fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = liod::test::program_scratch_dir() / name;
-  fs::remove_all(dir);
-  return dir;
-}
-
-struct Fixture {
-  std::vector<BackendKeyframe> keyframes;
-  PoseGraph graph;
-};
-
-void grow(Fixture& f, std::size_t n) {
-  for (std::size_t i = f.keyframes.size(); i < n; ++i) {
-    BackendKeyframe k;
-    k.id = 10 + i;
-    k.time = 0.5 * static_cast<double>(i);
-    k.odometry_pose.translation() = Eigen::Vector3d(static_cast<double>(i), 0.5, 0.0);
-    for (int j = 0; j < 200; ++j) k.planes.emplace_back(static_cast<float>(j), static_cast<float>(i), 1.0F);
-    k.edges.emplace_back(1.0F, 2.0F, 3.0F);
-    k.similarity.emplace_back(4.0F, 5.0F, 6.0F);
-    f.keyframes.push_back(k);
-    f.graph.add_node(k.odometry_pose);
-    if (i > 0) {
-      PoseGraphFactor factor;
-      factor.from = i - 1;
-      factor.to = i;
-      factor.measured.translation() = Eigen::Vector3d(1, 0, 0);
-      factor.information = relative_pose_information(0.05, 0.01);
-      factor.loop = i % 7 == 0;
-      f.graph.add_factor(factor);
-    }
-  }
-}
+using liod::test::fresh_state_dir;
+using liod::test::read_bytes;
+using liod::test::StateFixture;
+using liod::test::write_bytes;
 
 TEST(MapStore, RoundTrip) {
-  const fs::path dir = fresh_dir("roundtrip");
-  Fixture f;
-  grow(f, 5);
+  const fs::path dir = fresh_state_dir("roundtrip");
+  StateFixture f;
+  f.first_id = 10;
+  test::grow(f, 5);
   StateWriter writer(dir);
   writer.save(f.keyframes, f.graph);
-  grow(f, 9);
+  test::grow(f, 9);
+  test::bend(f, 3, 0.25);
   writer.save(f.keyframes, f.graph);
+  writer.flush();
   const PersistedState s = load_state(dir);
   ASSERT_EQ(s.keyframes.size(), 9U);
   ASSERT_EQ(s.poses.size(), 9U);
@@ -71,40 +43,51 @@ TEST(MapStore, RoundTrip) {
     EXPECT_EQ(s.keyframes[i].id, f.keyframes[i].id);
     EXPECT_EQ(s.keyframes[i].time, f.keyframes[i].time);
     EXPECT_EQ(s.keyframes[i].planes, f.keyframes[i].planes);
-    EXPECT_TRUE(s.poses[i].isApprox(f.graph.pose(i)));
+    EXPECT_TRUE(s.poses[i].isApprox(f.graph.pose(i))) << i;
+    EXPECT_EQ(s.runs[i], 0U);
   }
   EXPECT_EQ(s.factors[6].loop, true);
+  EXPECT_EQ(s.factors[6].from, 6U);
   EXPECT_TRUE(s.factors[3].information.isApprox(f.graph.factors()[3].information));
+  EXPECT_TRUE(s.notes.empty());
   fs::remove_all(dir);
 }
 
-TEST(MapStore, PartialTempFileAfterACrashLoadsTheLastGoodState) {
-  const fs::path dir = fresh_dir("crash");
-  Fixture f;
-  grow(f, 4);
+TEST(MapStore, PartialTempFilesAfterACrashAreIgnoredAndCleared) {
+  const fs::path dir = fresh_state_dir("crash");
+  StateFixture f;
+  test::grow(f, 4);
   StateWriter(dir).save(f.keyframes, f.graph);
-  // The crash: the next save died while writing graph.bin.tmp and a keyframe's temp file.
-  {
-    std::ofstream(dir / "graph.bin.tmp", std::ios::binary) << "LIODGRF1\x01\x00\x00";
-    std::ofstream(dir / "keyframes" / "14.kf.tmp", std::ios::binary) << "LIODK";
-  }
-  const PersistedState s = load_state(dir);
-  EXPECT_EQ(s.keyframes.size(), 4U);
-  // A new writer clears the debris and continues.
+  // The crash: a compaction died while writing its temp files, and a keyframe's temp file.
+  write_bytes(dir / "graph.bin.tmp", std::string("LIODGRF1\x02\x00\x00", 7));
+  write_bytes(dir / "journal.bin.tmp", "LIODJ");
+  write_bytes(dir / "keyframes" / "4.kf.tmp", "LIODK");
+  EXPECT_EQ(load_state(dir).keyframes.size(), 4U);
+  // A new run clears the debris and continues after the first run's ids.
   StateWriter writer(dir);
   EXPECT_FALSE(fs::exists(dir / "graph.bin.tmp"));
-  grow(f, 6);
-  writer.save(f.keyframes, f.graph);
+  EXPECT_FALSE(fs::exists(dir / "keyframes" / "4.kf.tmp"));
+  EXPECT_EQ(writer.first_keyframe_id(), 4U);
+  EXPECT_EQ(writer.run(), 1U);
+  StateFixture second;
+  second.first_id = writer.first_keyframe_id();
+  test::grow(second, 2);
+  writer.save(second.keyframes, second.graph);
+  writer.flush();
   EXPECT_EQ(load_state(dir).keyframes.size(), 6U);
   fs::remove_all(dir);
 }
 
 TEST(MapStore, CorruptOrMissingFilesAreNamed) {
-  const fs::path dir = fresh_dir("corrupt");
+  const fs::path dir = fresh_state_dir("corrupt");
   EXPECT_THROW(load_state(dir), StateError);
-  Fixture f;
-  grow(f, 3);
-  StateWriter(dir).save(f.keyframes, f.graph);
+  StateFixture f;
+  f.first_id = 10;
+  test::grow(f, 3);
+  {
+    StateWriter writer(dir);
+    writer.save(f.keyframes, f.graph);
+  }
   auto expect_error = [&](const std::string& needle) {
     try {
       load_state(dir);
@@ -113,30 +96,69 @@ TEST(MapStore, CorruptOrMissingFilesAreNamed) {
       EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
     }
   };
-  // A flipped byte in graph.bin.
-  const fs::path graph = dir / "graph.bin";
-  std::string bytes;
-  {
-    std::ifstream in(graph, std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  }
-  std::string flipped = bytes;
-  flipped[40] = static_cast<char>(flipped[40] ^ 0x5A);
-  std::ofstream(graph, std::ios::binary | std::ios::trunc) << flipped;
-  expect_error("graph.bin: checksum mismatch");
-  // Truncated.
-  std::ofstream(graph, std::ios::binary | std::ios::trunc) << bytes.substr(0, bytes.size() / 2);
-  expect_error("graph.bin");
-  // Intact graph, but a keyframe it lists is gone.
-  std::ofstream(graph, std::ios::binary | std::ios::trunc) << bytes;
   EXPECT_NO_THROW(load_state(dir));
   fs::remove(dir / "keyframes" / "11.kf");
   expect_error("11.kf: missing");
+  // A snapshot (a run whose writer compacts at once) with a flipped byte.
+  const fs::path other = fresh_state_dir("corrupt-snapshot");
+  {
+    StateWriter writer(other, StateWriterOptions{0.0, 0});
+    writer.save(f.keyframes, f.graph);
+  }
+  ASSERT_TRUE(fs::exists(other / "graph.bin"));
+  std::string bytes = read_bytes(other / "graph.bin");
+  bytes[40] = static_cast<char>(bytes[40] ^ 0x5A);
+  write_bytes(other / "graph.bin", bytes);
+  try {
+    load_state(other);
+    ADD_FAILURE() << "a flipped byte in graph.bin loaded";
+  } catch (const StateError& e) {
+    EXPECT_NE(std::string(e.what()).find("graph.bin: checksum mismatch"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
+  fs::remove_all(other);
+}
+
+// Two runs into one directory: the second run's ids continue after the first's, both runs'
+// keyframe files stay as written, and the graph names every one of them with its run.
+TEST(MapStore, RunsSharingADirectoryKeepEachOthersKeyframes) {
+  const fs::path dir = fresh_state_dir("runs");
+  StateFixture first;
+  test::grow(first, 6);
+  {
+    StateWriter writer(dir);
+    writer.save(first.keyframes, first.graph);
+  }
+  const std::string first_file = read_bytes(dir / "keyframes" / "0.kf");
+  StateFixture second;
+  {
+    StateWriter writer(dir);
+    EXPECT_EQ(writer.graph().nodes.size(), 6U);
+    second.first_id = writer.first_keyframe_id();
+    second.points = 50;
+    test::grow(second, 4);
+    writer.save(second.keyframes, second.graph);
+  }
+  EXPECT_EQ(second.first_id, 6U);
+  EXPECT_EQ(read_bytes(dir / "keyframes" / "0.kf"), first_file);
+  const PersistedState s = load_state(dir);
+  ASSERT_EQ(s.keyframes.size(), 10U);
+  ASSERT_EQ(s.factors.size(), 5U + 3U);
+  for (std::size_t i = 0; i < 10; ++i) {
+    EXPECT_EQ(s.keyframes[i].id, i);
+    EXPECT_EQ(s.runs[i], i < 6 ? 0U : 1U);
+    EXPECT_EQ(s.keyframes[i].planes.size(), i < 6 ? 200U : 50U);
+  }
+  // The second run's factors join its own nodes only.
+  for (std::size_t k = 5; k < s.factors.size(); ++k) EXPECT_GE(s.factors[k].from, 6U);
+  // A keyframe file that no graph names (a run that died before its first commit) is not reused.
+  write_bytes(dir / "keyframes" / "25.kf", "debris of a run that died");
+  EXPECT_EQ(StateWriter(dir).first_keyframe_id(), 26U);
   fs::remove_all(dir);
 }
 
 TEST(MapStore, SigkillDuringSavesAlwaysLeavesALoadableState) {
-  const fs::path dir = fresh_dir("sigkill");
+  const fs::path dir = fresh_state_dir("sigkill");
   std::mt19937 rng(1);
   std::uniform_int_distribution<int> delay_us(0, 30000);
   std::size_t last_loaded = 0;
@@ -144,11 +166,15 @@ TEST(MapStore, SigkillDuringSavesAlwaysLeavesALoadableState) {
     const pid_t child = ::fork();
     ASSERT_GE(child, 0);
     if (child == 0) {
-      // The child saves a growing state as fast as it can until it is killed.
-      Fixture f;
-      StateWriter writer(dir);
+      // Each child is a run: it saves a growing state as fast as it can, compacting often, until
+      // it is killed.
+      StateWriter writer(dir, StateWriterOptions{1.0, 4096});
+      StateFixture f;
+      f.first_id = writer.first_keyframe_id();
+      f.points = 20;
       for (std::size_t n = 1;; ++n) {
-        grow(f, n);
+        test::grow(f, n);
+        if (n % 5 == 0) test::bend(f, 4, 0.01);
         writer.save(f.keyframes, f.graph);
       }
     }
@@ -156,10 +182,12 @@ TEST(MapStore, SigkillDuringSavesAlwaysLeavesALoadableState) {
     ::kill(child, SIGKILL);
     int status = 0;
     ::waitpid(child, &status, 0);
-    if (!fs::exists(dir / "graph.bin")) continue;  // killed before the first commit
+    if (!fs::exists(dir / "journal.bin")) continue;  // killed before the first commit
     PersistedState s;
     ASSERT_NO_THROW(s = load_state(dir)) << "round " << round;
     EXPECT_EQ(s.keyframes.size(), s.poses.size());
+    // A kill is no power loss: every save that returned is in the files, and no run's start loses one.
+    EXPECT_GE(s.keyframes.size(), last_loaded) << "round " << round;
     last_loaded = s.keyframes.size();
   }
   EXPECT_GT(last_loaded, 0U);

@@ -42,13 +42,15 @@ Eigen::Isometry3d interpolate(const Eigen::Isometry3d& a, const Eigen::Isometry3
 
 }  // namespace
 
-Backend::Backend(const AlgorithmConfig& config, std::shared_ptr<KeyframeSpill> spill)
-    : config_(config), keyframes_(static_cast<std::size_t>(config.backend.memory_keyframes), std::move(spill)) {}
+Backend::Backend(const AlgorithmConfig& config, std::shared_ptr<KeyframeSpill> spill, std::uint64_t first_keyframe_id)
+    : config_(config),
+      keyframes_(static_cast<std::size_t>(config.backend.memory_keyframes), std::move(spill)),
+      first_keyframe_id_(first_keyframe_id) {}
 
 bool Backend::add_keyframe(const Keyframe& keyframe) {
   const BackendConfig& b = config_.backend;
   BackendKeyframe k;
-  k.id = keyframe.id;
+  k.id = first_keyframe_id_ + keyframe.id;
   k.time = keyframe.state.time;
   k.odometry_pose = isometry(keyframe.state);
   k.planes = to_body(keyframe.planes_world, k.odometry_pose, b.keyframe_voxel_m);

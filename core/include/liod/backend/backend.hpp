@@ -35,8 +35,12 @@ struct BackendStats {
 class Backend {
  public:
   /// `spill`: where keyframe clouds go beyond backend.memory_keyframes (nullptr: all stay in
-  /// memory; the daemon passes a KeyframeDirectory, map_store.hpp).
-  explicit Backend(const AlgorithmConfig& config, std::shared_ptr<KeyframeSpill> spill = nullptr);
+  /// memory; the daemon passes a KeyframeDirectory, map_store.hpp). `first_keyframe_id`: the
+  /// backend's id of a keyframe is this plus the front end's (which counts from 0 in every
+  /// process), so that a run persisting into a state directory that earlier runs filled keeps
+  /// their keyframes (StateWriter::first_keyframe_id()).
+  explicit Backend(const AlgorithmConfig& config, std::shared_ptr<KeyframeSpill> spill = nullptr,
+                   std::uint64_t first_keyframe_id = 0);
 
   /// Adds a keyframe (its points are in the odometry's world frame, as the front end keeps
   /// them); returns true when it closed a loop (and the graph was re-optimised).
@@ -71,6 +75,7 @@ class Backend {
   std::vector<LoopCheck> checks_;
   BackendStats stats_;
   int cooldown_ = 0;
+  std::uint64_t first_keyframe_id_ = 0;
 };
 
 }  // namespace liod

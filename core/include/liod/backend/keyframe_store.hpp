@@ -6,8 +6,8 @@
 // handed to a KeyframeSpill as they arrive (write-through: a keyframe is written once, and
 // evicting it later costs nothing) and the store keeps the most recently used ones, new
 // keyframes included, in an LRU cache; the others are read back on demand. Pure: the spill is an
-// interface, its file implementation (KeyframeDirectory) lives in map_store.cpp, the one unit of
-// the backend that does I/O. Without a spill every cloud stays in memory.
+// interface, its file implementation (KeyframeDirectory) lives in map_store.cpp, among the units of
+// the backend that do I/O. Without a spill every cloud stays in memory.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
