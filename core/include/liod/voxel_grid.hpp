@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <vector>
 
 namespace liod {
@@ -28,7 +29,13 @@ struct VoxelKeyHash {
 /// floor() to an integer: truncation, minus one for a negative non-integer. Equal to std::floor
 /// in the int32 range, and a third of its instructions on x86-64's baseline (no rounding
 /// instruction there: GCC emulates floor on doubles); voxel keys are taken millions of times a scan.
+/// Beyond the int32 range (a point of a diverged state, before the odometry restarts from it) the
+/// key saturates, NaN to the lowest: the conversion would be undefined.
 inline std::int32_t floor_to_int(double v) {
+  constexpr double kLimit = 2147483647.0;
+  if (!(v > -kLimit && v < kLimit)) [[unlikely]] {
+    return v >= kLimit ? std::numeric_limits<std::int32_t>::max() : std::numeric_limits<std::int32_t>::min();
+  }
   const auto truncated = static_cast<std::int32_t>(v);
   return truncated - static_cast<std::int32_t>(v < static_cast<double>(truncated));
 }
