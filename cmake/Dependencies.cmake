@@ -14,5 +14,6 @@ if(LIOD_BUILD_TESTS)
   find_package(benchmark REQUIRED)
 endif()
 # Ceres is found where it is used (the backend library), to keep its slow headers contained.
-# PCL only for the map's PCD (daemon/src/map_export.cpp, the one unit that includes it).
+# PCL only for test_state_dir, which reads the PCDs liod writes with PCL's reader
+# (daemon/include/liod/daemon/map_export.hpp says why liod does not write them with PCL).
 find_package(PCL QUIET REQUIRED COMPONENTS common io)

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# Installs liod's build and test dependencies from Debian/Ubuntu packages. (The global map's PCD
-# is written with PCL, so that PCL and CloudCompare read it as they expect; pcap captures and the
-# decoder's sweep PCDs are liod's own small code, so libpcap is not needed.)
+# Installs liod's build and test dependencies from Debian/Ubuntu packages. (PCL is for a test:
+# the maps liod writes are read back with PCL's reader, as a user's tools would read them; pcap
+# captures and PCD files are liod's own small code, so neither libpcap nor PCL ships with liod.)
 # Idempotent: packages already present are skipped; safe to run again.
 set -euo pipefail
 

@@ -1,13 +1,13 @@
 #include "liod/daemon/map_export.hpp"
 
 #include <fcntl.h>
-#include <pcl/io/pcd_io.h>
-#include <pcl/point_cloud.h>
-#include <pcl/point_types.h>
 #include <unistd.h>
 
+#include <bit>
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
+#include <fstream>
 #include <ostream>
 #include <stdexcept>
 
@@ -35,16 +35,25 @@ void fsync_path(const fs::path& path, int flags) {
 }  // namespace
 
 void write_map_pcd(const fs::path& path, const std::vector<Eigen::Vector3d>& points) {
-  pcl::PointCloud<pcl::PointXYZ> cloud;
-  cloud.reserve(points.size());
-  for (const auto& p : points) cloud.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
-  cloud.width = static_cast<std::uint32_t>(cloud.size());
-  cloud.height = 1;
-  cloud.is_dense = true;
-  // A reader (or a crash) never sees half a map: PCL writes the temp file, which replaces the
-  // old map only once it is on disk.
+  std::string bytes = "# .PCD v0.7 - liod global map\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH " +
+                      std::to_string(points.size()) + "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " +
+                      std::to_string(points.size()) + "\nDATA binary\n";
+  bytes.reserve(bytes.size() + points.size() * 12);
+  for (const auto& p : points) {
+    for (int k = 0; k < 3; ++k) {
+      const auto bits = std::bit_cast<std::uint32_t>(static_cast<float>(p[k]));
+      for (int b = 0; b < 4; ++b) bytes.push_back(static_cast<char>((bits >> (8 * b)) & 0xFFU));
+    }
+  }
+  // A reader (or a crash) never sees half a map: the temp file replaces the old map only once it
+  // is on disk.
   const fs::path temp = path.string() + ".tmp";
-  if (pcl::io::savePCDFileBinary(temp.string(), cloud) != 0) throw std::runtime_error(temp.string() + ": PCL could not write the PCD");
+  {
+    std::ofstream f(temp, std::ios::binary | std::ios::trunc);
+    f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    f.flush();
+    if (!f) throw std::runtime_error(temp.string() + ": cannot write the PCD");
+  }
   fsync_path(temp, O_RDONLY);
   if (::rename(temp.c_str(), path.c_str()) != 0) {
     throw std::runtime_error(path.string() + ": rename from the temp file failed (" + std::strerror(errno) + ")");

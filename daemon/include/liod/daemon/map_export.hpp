@@ -1,7 +1,9 @@
 #pragma once
 // The global map from a state directory (`liod map export`, and the backend's map.pcd at the end
 // of a run): every keyframe's points at its optimised pose, voxel-downsampled, as a binary PCD
-// that PCL and CloudCompare open. PCL stays inside map_export.cpp: this header needs none of it.
+// that PCL and CloudCompare open (test_pcd_compat reads it with PCL). The PCD is written here
+// rather than by PCL: Debian's libpcl_io links VTK, OpenNI and OpenNI2, whose start-up code would
+// run in the daemon (and trips ThreadSanitizer), for a header and one array of floats.
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -19,8 +21,8 @@ struct MapExportOptions {
   double voxel_m = 0.3;   ///< downsampling of the merged map; 0 = every stored point
 };
 
-/// Writes `points` as a binary PCD (FIELDS x y z, float) with PCL, atomically: a temp file,
-/// fsync'ed, renamed over `path`. Throws std::runtime_error naming the file.
+/// Writes `points` as a binary PCD (FIELDS x y z, float, little-endian as on x86-64 and ARM64),
+/// atomically: a temp file, fsync'ed, renamed over `path`. Throws std::runtime_error naming the file.
 void write_map_pcd(const std::filesystem::path& path, const std::vector<Eigen::Vector3d>& points);
 
 struct GlobalMap {
