@@ -22,7 +22,7 @@ struct MapExportOptions {
 };
 
 /// Writes `points` as a binary PCD (FIELDS x y z, float, little-endian as on x86-64 and ARM64),
-/// atomically: a temp file, fsync'ed, renamed over `path`. Throws std::runtime_error naming the file.
+/// atomically: a temp file, fsync'ed, renamed over `path`. Throws StateError naming the file.
 void write_map_pcd(const std::filesystem::path& path, const std::vector<Eigen::Vector3d>& points);
 
 struct GlobalMap {
