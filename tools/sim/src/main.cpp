@@ -44,7 +44,12 @@ int main(int argc, char** argv) {
   app.add_option("--threads", cfg.threads, "worker threads (output does not depend on it)")->default_val(2);
   app.add_option("--epoch", cfg.epoch_s, "UTC seconds of t = 0 on the IMU clock")->default_val(1700000000);
   app.add_flag("--quiet", quiet, "no progress output");
+  std::uint64_t route_seed = 0;
+  auto* route_seed_option = app.add_option("--route-seed", route_seed,
+                                           "urban, loop: another route through the seed's world (same duration and max "
+                                           "speed), from a random street and heading");
   CLI11_PARSE(app, argc, argv);
+  if (route_seed_option->count() > 0) cfg.scene.route_seed = route_seed;
 
   const auto kind = liod::sim::parse_route(route);
   if (!kind) {
@@ -66,6 +71,10 @@ int main(int argc, char** argv) {
   }
   if (!(cfg.angle_error_deg >= 0.0) || cfg.angle_error_deg > 0.1) {
     std::fprintf(stderr, "liod-sim: --angle-error-deg must be in [0, 0.1] degrees, got %g\n", cfg.angle_error_deg);
+    return 2;
+  }
+  if (cfg.scene.route_seed && *kind != liod::sim::RouteKind::Urban && *kind != liod::sim::RouteKind::Loop) {
+    std::fprintf(stderr, "liod-sim: --route-seed needs a city route (urban, loop)\n");
     return 2;
   }
   if (rolling && stationary) {

@@ -119,6 +119,7 @@ void Simulation::write_yaml(const RunReport& report) const {
     << "version: " << kSimVersion << "\n"
     << "route: " << route_name(r.route) << "\n"
     << "seed: " << r.seed << "\n"
+    << (r.route_seed ? "route_seed: " + std::to_string(*r.route_seed) + "\n" : std::string())
     << "duration_s: " << num(r.duration) << "\n"
     << "max_speed_mps: " << num(r.max_speed) << "\n"
     << "start: " << (scene_.plan.static_start_s > 0.0 ? "static" : "rolling") << "\n"

@@ -14,6 +14,9 @@ namespace liod::sim::detail {
 
 namespace {
 
+// The stream of a second route through a world (SceneRequest::route_seed).
+constexpr std::uint64_t kRouteStream = 0x726F757465ULL;
+
 struct Grid {
   std::vector<double> xs;  // road lines 0..N+1, plus one virtual line beyond each side
   std::vector<double> ys;
@@ -200,6 +203,125 @@ void build_block(SceneBuilder& b, const Grid& g, double x0, double x1, double y0
   }
 }
 
+// The corners of the urban random walk. `any_start`: the walk starts on a random street in a random
+// direction (a second drive through the same world); else on the first street of a random row,
+// heading +x. The first excursion goes round one block, so even a short drive revisits its start.
+std::vector<Eigen::Vector2d> walk_corners(const Grid& g, const SceneRequest& req, Rng& rng, bool any_start) {
+  const int sj = rng.uniform_int(1, g.n);
+  NodeState cur{2, sj, 0};
+  if (any_start) {
+    do {
+      cur = NodeState{rng.uniform_int(1, g.n), rng.uniform_int(1, g.n), rng.uniform_int(0, 3)};
+    } while (cur.i - kDi[static_cast<std::size_t>(cur.dir)] < 1 || cur.i - kDi[static_cast<std::size_t>(cur.dir)] > g.n ||
+             cur.j - kDj[static_cast<std::size_t>(cur.dir)] < 1 || cur.j - kDj[static_cast<std::size_t>(cur.dir)] > g.n);
+  }
+  const NodeState home = cur;
+  const Eigen::Vector2d before =
+      node_pos(g, cur.i - kDi[static_cast<std::size_t>(cur.dir)], cur.j - kDj[static_cast<std::size_t>(cur.dir)]);
+  std::vector<Eigen::Vector2d> corners = {0.5 * (before + node_pos(g, cur.i, cur.j)), node_pos(g, cur.i, cur.j)};
+  const double needed = req.max_speed * req.duration + 300.0;
+  double length = (corners[1] - corners[0]).norm();
+  bool first = true;
+  while (length < needed) {
+    int ti = 0;
+    int tj = 0;
+    if (first) {
+      ti = cur.i + 1 <= g.n ? cur.i + 1 : cur.i - 1;
+      tj = cur.j + 1 <= g.n ? cur.j + 1 : cur.j - 1;
+      first = false;
+    } else {
+      do {
+        ti = rng.uniform_int(1, g.n);
+        tj = rng.uniform_int(1, g.n);
+      } while (std::abs(ti - cur.i) + std::abs(tj - cur.j) < 2);
+    }
+    for (int leg = 0; leg < 2; ++leg) {
+      const int gi = leg == 0 ? ti : home.i;
+      const int gj = leg == 0 ? tj : home.j;
+      const auto path = plan_path(g, cur, gi, gj, rng);
+      for (std::size_t k = 1; k < path.size(); ++k) {
+        const Eigen::Vector2d p = node_pos(g, path[k].i, path[k].j);
+        length += (p - corners.back()).norm();
+        corners.push_back(p);
+      }
+      cur = path.back();
+    }
+  }
+  // End half-way down the next street so the last junction is a real one.
+  corners.push_back(corners.back() + 0.5 * Eigen::Vector2d(kDi[static_cast<std::size_t>(cur.dir)],
+                                                             kDj[static_cast<std::size_t>(cur.dir)]) *
+                                         70.0);
+  return corners;
+}
+
+// The suburban loop: one loop around blocks, its perimeter fitted to the drive, driven lap after lap.
+std::vector<Eigen::Vector2d> loop_corners(const Grid& g, const SceneRequest& req, Rng& rng) {
+  const double expected = 0.6 * req.max_speed * req.duration;
+  const double target = std::clamp(expected / 1.6, 300.0, 1600.0);
+  int best_a = 1;
+  int best_b = 1;
+  double best_err = 1e18;
+  for (int a = 1; a <= 3; ++a) {
+    for (int b = 1; b <= 3; ++b) {
+      const double per = 2.0 * ((node_pos(g, 1 + a, 1) - node_pos(g, 1, 1)).norm() +
+                                (node_pos(g, 1, 1 + b) - node_pos(g, 1, 1)).norm());
+      if (std::abs(per - target) < best_err) {
+        best_err = std::abs(per - target);
+        best_a = a;
+        best_b = b;
+      }
+    }
+  }
+  const int i0 = 1 + rng.uniform_int(0, g.n - best_a - 1);
+  const int j0 = 1 + rng.uniform_int(0, g.n - best_b - 1);
+  const std::vector<Eigen::Vector2d> lap = {
+      0.5 * (node_pos(g, i0, j0) + node_pos(g, i0 + best_a, j0)), node_pos(g, i0 + best_a, j0),
+      node_pos(g, i0 + best_a, j0 + best_b), node_pos(g, i0, j0 + best_b), node_pos(g, i0, j0)};
+  const double per = 2.0 * ((node_pos(g, i0 + best_a, j0) - node_pos(g, i0, j0)).norm() +
+                            (node_pos(g, i0, j0 + best_b) - node_pos(g, i0, j0)).norm());
+  const int laps = static_cast<int>(std::ceil((req.max_speed * req.duration + 300.0) / per));
+  return repeat_loop(lap, laps);
+}
+
+// The lane along the corners and its speed profile.
+DrivePlan plan_drive(const std::vector<Eigen::Vector2d>& corners, double cruise, bool loop_route, Rng& rng) {
+  // Dense lane path: right-hand traffic, lane centre 2 m right of the road centre line.
+  const std::vector<Eigen::Vector2d> centre = rounded_polyline(corners, 9.0, 1.0);
+  const std::vector<Eigen::Vector2d> lane =
+      offset_polyline(centre, std::vector<double>(centre.size(), 2.0));
+  DrivePlan plan;
+  plan.points = lane;
+  plan.cruise_speed = cruise;
+  plan.speed_cap.assign(lane.size(), cruise);
+  const std::vector<double> s_lane = polyline_arclength(lane);
+  // Traffic: every street has its own pace; straight through a junction a driver slows a bit;
+  // some junctions have a red light or a stop sign.
+  const std::vector<std::size_t> at = locate_in_order(lane, std::vector<Eigen::Vector2d>(
+                                                                corners.begin() + 1, corners.end() - 1));
+  double last_stop = 0.0;
+  std::size_t prev = 0;
+  for (std::size_t k = 0; k < at.size(); ++k) {
+    const double pace = rng.uniform(0.75, 1.0) * cruise;
+    for (std::size_t i = prev; i < at[k] && i < lane.size(); ++i) {
+      plan.speed_cap[i] = pace;
+    }
+    prev = at[k];
+    if (at[k] >= lane.size()) continue;  // a corner the lane never passes near (read past the end before)
+    const double sj = s_lane[at[k]];
+    for (std::size_t i = 0; i < lane.size(); ++i) {
+      if (std::abs(s_lane[i] - sj) < 12.0) {
+        plan.speed_cap[i] = std::min(plan.speed_cap[i], 0.75 * cruise);
+      }
+    }
+    const double p_stop = loop_route ? 0.12 : 0.25;
+    if (sj - 10.0 > last_stop + 40.0 && sj > 60.0 && rng.bernoulli(p_stop)) {
+      plan.stops.push_back(Stop{sj - 10.0, rng.uniform(2.0, 8.0)});
+      last_stop = sj;
+    }
+  }
+  return plan;
+}
+
 }  // namespace
 
 Scene make_city(const SceneRequest& req, Rng& rng, bool loop_route) {
@@ -221,113 +343,16 @@ Scene make_city(const SceneRequest& req, Rng& rng, bool loop_route) {
   make_lines(g.xs);
   make_lines(g.ys);
 
-  // The route, as a list of junction corners.
-  std::vector<Eigen::Vector2d> corners;
-  std::vector<bool> turn_at;  // per corner: is it a junction (true) or a start/end point
-  double cruise = req.max_speed;
+  // The route. The world is drawn after it from the same stream, so a second route through the
+  // same world (`route_seed`) is drawn from a stream of its own after the first one.
   Scene scene;
-  if (!loop_route) {
-    const int sj = rng.uniform_int(1, g.n);
-    const Eigen::Vector2d start = 0.5 * (node_pos(g, 1, sj) + node_pos(g, 2, sj));
-    corners.push_back(start);
-    NodeState cur{2, sj, 0};
-    corners.push_back(node_pos(g, 2, sj));
-    const double needed = req.max_speed * req.duration + 300.0;
-    double length = (corners[1] - corners[0]).norm();
-    bool first = true;
-    while (length < needed) {
-      int ti = 0;
-      int tj = 0;
-      if (first) {
-        // The first excursion goes round one block, so even a short drive revisits its start.
-        ti = cur.i + 1 <= g.n ? cur.i + 1 : cur.i - 1;
-        tj = cur.j + 1 <= g.n ? cur.j + 1 : cur.j - 1;
-        first = false;
-      } else {
-        do {
-          ti = rng.uniform_int(1, g.n);
-          tj = rng.uniform_int(1, g.n);
-        } while (std::abs(ti - cur.i) + std::abs(tj - cur.j) < 2);
-      }
-      for (int leg = 0; leg < 2; ++leg) {
-        const int gi = leg == 0 ? ti : 2;
-        const int gj = leg == 0 ? tj : sj;
-        const auto path = plan_path(g, cur, gi, gj, rng);
-        for (std::size_t k = 1; k < path.size(); ++k) {
-          const Eigen::Vector2d p = node_pos(g, path[k].i, path[k].j);
-          length += (p - corners.back()).norm();
-          corners.push_back(p);
-        }
-        cur = path.back();
-      }
-    }
-    // End half-way down the next street so the last junction is a real one.
-    corners.push_back(corners.back() + 0.5 * Eigen::Vector2d(kDi[static_cast<std::size_t>(cur.dir)],
-                                                               kDj[static_cast<std::size_t>(cur.dir)]) *
-                                           70.0);
-  } else {
-    const double expected = 0.6 * req.max_speed * req.duration;
-    const double target = std::clamp(expected / 1.6, 300.0, 1600.0);
-    int best_a = 1;
-    int best_b = 1;
-    double best_err = 1e18;
-    for (int a = 1; a <= 3; ++a) {
-      for (int b = 1; b <= 3; ++b) {
-        const double per = 2.0 * ((node_pos(g, 1 + a, 1) - node_pos(g, 1, 1)).norm() +
-                                  (node_pos(g, 1, 1 + b) - node_pos(g, 1, 1)).norm());
-        if (std::abs(per - target) < best_err) {
-          best_err = std::abs(per - target);
-          best_a = a;
-          best_b = b;
-        }
-      }
-    }
-    const int i0 = 1 + rng.uniform_int(0, g.n - best_a - 1);
-    const int j0 = 1 + rng.uniform_int(0, g.n - best_b - 1);
-    const std::vector<Eigen::Vector2d> lap = {
-        0.5 * (node_pos(g, i0, j0) + node_pos(g, i0 + best_a, j0)), node_pos(g, i0 + best_a, j0),
-        node_pos(g, i0 + best_a, j0 + best_b), node_pos(g, i0, j0 + best_b), node_pos(g, i0, j0)};
-    const double per = 2.0 * ((node_pos(g, i0 + best_a, j0) - node_pos(g, i0, j0)).norm() +
-                              (node_pos(g, i0, j0 + best_b) - node_pos(g, i0, j0)).norm());
-    const int laps = static_cast<int>(std::ceil((req.max_speed * req.duration + 300.0) / per));
-    corners = repeat_loop(lap, laps);
-  }
-
-  // Dense lane path: right-hand traffic, lane centre 2 m right of the road centre line.
-  const std::vector<Eigen::Vector2d> centre = rounded_polyline(corners, 9.0, 1.0);
-  const std::vector<Eigen::Vector2d> lane =
-      offset_polyline(centre, std::vector<double>(centre.size(), 2.0));
-  DrivePlan& plan = scene.plan;
-  plan.points = lane;
-  plan.cruise_speed = cruise;
-  plan.speed_cap.assign(lane.size(), cruise);
-  const std::vector<double> s_lane = polyline_arclength(lane);
-  {
-    // Traffic: every street has its own pace; straight through a junction a driver slows a bit;
-    // some junctions have a red light or a stop sign.
-    const std::vector<std::size_t> at = locate_in_order(lane, std::vector<Eigen::Vector2d>(
-                                                                  corners.begin() + 1, corners.end() - 1));
-    double last_stop = 0.0;
-    std::size_t prev = 0;
-    for (std::size_t k = 0; k < at.size(); ++k) {
-      const double pace = rng.uniform(0.75, 1.0) * cruise;
-      for (std::size_t i = prev; i < at[k] && i < lane.size(); ++i) {
-        plan.speed_cap[i] = pace;
-      }
-      prev = at[k];
-      if (at[k] >= lane.size()) continue;  // a corner the lane never passes near (read past the end before)
-      const double sj = s_lane[at[k]];
-      for (std::size_t i = 0; i < lane.size(); ++i) {
-        if (std::abs(s_lane[i] - sj) < 12.0) {
-          plan.speed_cap[i] = std::min(plan.speed_cap[i], 0.75 * cruise);
-        }
-      }
-      const double p_stop = loop_route ? 0.12 : 0.25;
-      if (sj - 10.0 > last_stop + 40.0 && sj > 60.0 && rng.bernoulli(p_stop)) {
-        plan.stops.push_back(Stop{sj - 10.0, rng.uniform(2.0, 8.0)});
-        last_stop = sj;
-      }
-    }
+  scene.plan = plan_drive(loop_route ? loop_corners(g, req, rng) : walk_corners(g, req, rng, false), req.max_speed,
+                          loop_route, rng);
+  const std::vector<Eigen::Vector2d> lane = scene.plan.points;
+  if (req.route_seed) {
+    Rng route(derive_seed(*req.route_seed, kRouteStream));
+    scene.plan = plan_drive(loop_route ? loop_corners(g, req, route) : walk_corners(g, req, route, true),
+                            req.max_speed, loop_route, route);
   }
 
   // World extents and terrain.

@@ -25,6 +25,9 @@ struct SceneRequest {
   double max_speed = 12.0;
   StartMode start = StartMode::Default;
   double static_seconds = 3.0;
+  /// A second drive through the same world (city routes: same seed, duration and max speed): the
+  /// route is drawn from this seed, starting on a random street in a random direction.
+  std::optional<std::uint64_t> route_seed;
 };
 
 struct Scene {
