@@ -71,6 +71,8 @@ void add_offline_commands(CLI::App& app, Commands& c) {
   c.replay->add_option("--imu", r.imu_csv, "IMU log (CSV, see README)")->required()->check(CLI::ExistingFile);
   c.replay->add_option("--trajectory", r.trajectory_tum, "output: scan-rate poses, TUM format")->required();
   c.replay->add_option("--imu-rate-trajectory", r.imu_rate_tum, "output: IMU-rate poses, TUM format");
+  c.replay->add_option("--map-frame-trajectory", r.map_frame_tum,
+                       "output: scan-rate map-frame poses as published (those placed in the map), TUM format");
   c.replay->add_option("--scan-log", r.scan_log_csv, "output: per-scan status, features and timings (CSV)");
   c.replay->add_flag("!--no-progress", r.progress, "no progress bar (one is drawn only on a terminal)");
   r.progress = true;

@@ -122,6 +122,7 @@ void declare_backend(Schema& s, BackendConfig& b) {
   s.real("backend.map_voxel_m", &b.map_voxel_m, 0.01, 10.0);
   s.boolean("backend.persist", &b.persist);
   s.integer("backend.memory_keyframes", &b.memory_keyframes, 0, 1000000);
+  s.choice("backend.mode", &b.mode, {{"map", BackendMode::kMap}, {"localise", BackendMode::kLocalize}});
 }
 
 // The drivers' keys (drivers/sensor_config.hpp).

@@ -11,12 +11,14 @@
 #include <algorithm>
 #include <exception>
 #include <filesystem>
+#include <iomanip>
 #include <sstream>
 
 #include "liod/backend/map_store.hpp"
 #include "liod/daemon/map_export.hpp"
 
 #include "liod/daemon/percentile.hpp"
+#include "liod/angles.hpp"
 
 namespace liod {
 
@@ -45,7 +47,8 @@ void remove_orphaned_scratch(const std::filesystem::path& parent, std::string_vi
 // The state directory's writer when persisting. A directory whose state cannot be read is left as
 // it is (nothing of it is overwritten) and this run does not persist: the daemon still runs.
 std::unique_ptr<StateWriter> open_state(const Config& config) {
-  if (!config.backend.persist) return nullptr;
+  // Localising never writes: the saved map stays as the runs that made it left it.
+  if (!config.backend.persist || config.backend.mode == BackendMode::kLocalize) return nullptr;
   try {
     auto writer = std::make_unique<StateWriter>(config.output.state_dir);
     for (const auto& note : writer->graph().notes) spdlog::warn("backend state: {}", note);
@@ -89,6 +92,31 @@ std::shared_ptr<KeyframeSpill> make_spill(const Config& config, bool persisting)
   return nullptr;
 }
 
+// The saved map this run relocalises in: mapping, the state the writer loaded; localising, the
+// state directory read as it is. None (a first run, or a directory that cannot be read) leaves a
+// mapping run in its own frame, which then starts the map.
+std::unique_ptr<Relocalizer> open_saved_map(const Config& config, const StateWriter* writer) {
+  namespace fs = std::filesystem;
+  const fs::path dir = config.output.state_dir;
+  try {
+    SavedMap map;
+    if (writer) {
+      map = saved_map(writer->graph(), read_map_runs(dir));
+    } else if (config.backend.mode == BackendMode::kLocalize) {
+      std::error_code ec;
+      if (fs::is_directory(dir, ec)) map = saved_map(load_graph(dir), read_map_runs(dir));
+      if (map.empty()) spdlog::error("backend: localise mode, but {} holds no map: poses stay flagged not_localized", dir.string());
+    }
+    if (map.empty()) return nullptr;
+    spdlog::info("backend: relocalising in the saved map of {} keyframes in {}", map.ids.size(), dir.string());
+    auto clouds = std::make_shared<KeyframeDirectory>(dir, KeyframeDirectory::Kind::kState);
+    return std::make_unique<Relocalizer>(std::move(map), std::move(clouds), config);
+  } catch (const StateError& e) {
+    spdlog::error("backend: the saved map is not used: {}", e.what());
+    return nullptr;
+  }
+}
+
 }  // namespace
 
 BackendWorker::BackendWorker(const Config& config, BackendWorkerOptions options)
@@ -97,7 +125,12 @@ BackendWorker::BackendWorker(const Config& config, BackendWorkerOptions options)
       // The writer first: it clears the temp files a crash left in the state directory and
       // knows the first keyframe id that earlier runs left free.
       writer_(open_state(config)),
-      backend_(config, make_spill(config, writer_ != nullptr), writer_ ? writer_->first_keyframe_id() : 0) {}
+      backend_(config, make_spill(config, writer_ != nullptr), writer_ ? writer_->first_keyframe_id() : 0) {
+  if (config.backend.persist || config.backend.mode == BackendMode::kLocalize) {
+    backend_.use_saved_map(open_saved_map(config, writer_.get()));
+  }
+  correction_.localized = backend_.localized();
+}
 
 BackendWorker::~BackendWorker() = default;
 
@@ -128,13 +161,46 @@ bool BackendWorker::process(const Keyframe& keyframe) {
     spdlog::info("loop closed: keyframe {} -> {} ({:.1f} s earlier), correction now {:.2f} m, solve {:.1f} ms",
                  kf.id(c.current), kf.id(c.candidate), kf.time(c.current) - kf.time(c.candidate),
                  backend_.correction().translation().norm(), backend_.stats().solve_ms.back());
-    const Eigen::Isometry3d correction = backend_.correction();
-    std::lock_guard lock(correction_mutex_);
-    correction_.map_from_odom = correction;
-    ++correction_.sequence;
   }
+  const bool newly_localized = backend_.localized() && !correction().localized;
+  if (newly_localized) {
+    const Eigen::Isometry3d t = backend_.correction();
+    spdlog::info("relocalised in the saved map at keyframe {} ({} attempts, {} placements): map from odometry {:.2f} m, "
+                 "yaw {:.1f} deg",
+                 backend_.stats().localized_keyframe, backend_.stats().relocalization_attempts, backend_.stats().placements, t.translation().norm(),
+                 std::atan2(t.linear()(1, 0), t.linear()(0, 0)) / kDegToRad);
+  }
+  if (backend_.correction_version() != published_version_) publish_correction();
   if (writer_) save_state();
+  if (writer_ && backend_.localized() && !map_run_recorded_) record_map_run();
   return closed;
+}
+
+void BackendWorker::publish_correction() {
+  published_version_ = backend_.correction_version();
+  const Eigen::Isometry3d correction = backend_.correction();
+  const bool localized = backend_.localized();
+  std::lock_guard lock(correction_mutex_);
+  correction_.map_from_odom = correction;
+  correction_.localized = localized;
+  ++correction_.sequence;
+}
+
+// Once this run is in the map's frame (it started the map, or was placed in it), its moved poses
+// are made durable, then the run is listed in map_runs: a crash between the two leaves the run in
+// its own frame, out of the map, never a run listed with poses in another frame.
+void BackendWorker::record_map_run() {
+  if (state_frozen_) return;
+  try {
+    writer_->flush();
+    std::vector<std::uint32_t> runs = read_map_runs(writer_->directory());
+    if (std::find(runs.begin(), runs.end(), writer_->run()) == runs.end()) runs.push_back(writer_->run());
+    write_map_runs(writer_->directory(), runs);
+    map_run_recorded_ = true;
+  } catch (const StateError& e) {
+    spdlog::warn("backend state no longer saved: {}", e.what());
+    state_frozen_ = true;
+  }
 }
 
 void BackendWorker::save_state() {
@@ -188,6 +254,13 @@ std::string BackendWorker::summary() const {
   out << "backend: loop checks median " << percentile(s.check_ms, 0.5) << " ms, max " << percentile(s.check_ms, 1.0)
       << " ms; pose-graph solves " << s.solve_ms.size() << ", median " << percentile(s.solve_ms, 0.5) << " ms, max "
       << percentile(s.solve_ms, 1.0) << " ms\n";
+  if (s.relocalization_attempts > 0 || !backend_.localized()) {
+    out << "backend: " << (backend_.localized() ? "relocalised" : "not relocalised") << " in the saved map";
+    if (backend_.localized()) out << " at keyframe " << s.localized_keyframe << ", t = " << std::setprecision(3) << s.localized_time;
+    out << std::setprecision(1) << " (" << s.relocalization_attempts << " attempts, " << s.placements << " placements";
+    if (config_.backend.mode == BackendMode::kLocalize) out << ", " << s.map_matches << " map matches";
+    out << ")\n";
+  }
   const KeyframeStore& kf = backend_.keyframes();
   out << "backend: keyframe clouds in memory " << kf.in_memory_count() << " of " << kf.size() << ", read back from disk "
       << kf.reads() << " times\n";

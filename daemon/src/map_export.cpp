@@ -1,3 +1,4 @@
+#include <algorithm>
 #include "liod/daemon/map_export.hpp"
 
 #include <bit>
@@ -40,11 +41,17 @@ GlobalMap global_map_from_state(const fs::path& state_dir, double voxel_m) {
   // points (voxel_downsample keeps the first point of each voxel) in the memory of the map.
   constexpr std::size_t kFlushPoints = 2'000'000;
   const PersistedGraph graph = load_graph(state_dir);
+  // Only the runs in the map's frame: a run never placed in it has poses in a frame of its own.
+  const std::vector<std::uint32_t> map_runs = read_map_runs(state_dir);
   GlobalMap map;
   map.runs = graph.runs();
   map.notes = graph.notes;
   std::size_t kept = 0;
   for (const GraphNode& node : graph.nodes) {
+    if (std::find(map_runs.begin(), map_runs.end(), node.run) == map_runs.end()) {
+      ++map.runs_left_out_keyframes;
+      continue;
+    }
     const BackendKeyframe kf = read_keyframe_file(state_dir, node.id);
     for (const auto& p : kf.planes) map.points.push_back(node.pose * p.cast<double>());
     for (const auto& p : kf.edges) map.points.push_back(node.pose * p.cast<double>());
@@ -65,6 +72,9 @@ int run_map_export(const MapExportOptions& options, std::ostream& out) {
     write_map_pcd(options.out, map.points);
     out << "map: " << map.points.size() << " points from " << map.keyframes << " keyframes of " << map.runs << " run(s), voxel "
         << options.voxel_m << " m -> " << options.out << '\n';
+    if (map.runs_left_out_keyframes > 0) {
+      out << "map: " << map.runs_left_out_keyframes << " keyframes of runs never relocalised in the map left out (their frames are their own)\n";
+    }
     return 0;
   } catch (const std::exception& e) {
     out << "error: " << e.what() << '\n';

@@ -251,6 +251,7 @@ void Pipeline::place_in_map(pose::PoseMessage& m) const {
   m.map_orientation = Eigen::Quaterniond(c.map_from_odom.linear()) * m.orientation;
   m.map_orientation.normalize();
   m.correction_sequence = c.sequence;
+  if (!c.localized) m.flags |= pose::kNotLocalized;
 }
 
 bool Pipeline::make_imu_pose(const ImuItem& item, PoseEvent& ev) {

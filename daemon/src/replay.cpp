@@ -88,9 +88,10 @@ class ScanLog {
 };
 
 /// Closes every output file; prints (and logs) each one that failed. True when all are complete.
-bool close_outputs(TrajectoryWriter& trajectory, TrajectoryWriter* imu_rate, ScanLog& scan_log, std::ostream& out) {
+bool close_outputs(TrajectoryWriter& trajectory, TrajectoryWriter* imu_rate, TrajectoryWriter* map_frame, ScanLog& scan_log,
+                   std::ostream& out) {
   std::vector<std::string> errors;
-  for (TrajectoryWriter* w : {&trajectory, imu_rate}) {
+  for (TrajectoryWriter* w : {&trajectory, imu_rate, map_frame}) {
     if (w != nullptr && !w->close()) errors.push_back(w->error() + " (the file is incomplete)");
   }
   if (const std::string e = scan_log.close(); !e.empty()) errors.push_back(e);
@@ -135,6 +136,8 @@ int run_replay(const Config& config, const ReplayOptions& options, std::ostream&
   TrajectoryWriter trajectory(options.trajectory_tum);
   std::unique_ptr<TrajectoryWriter> imu_rate;
   if (!options.imu_rate_tum.empty()) imu_rate = std::make_unique<TrajectoryWriter>(options.imu_rate_tum);
+  std::unique_ptr<TrajectoryWriter> map_frame;
+  if (!options.map_frame_tum.empty()) map_frame = std::make_unique<TrajectoryWriter>(options.map_frame_tum);
   ScanLog scan_log(options.scan_log_csv);
 
   PipelineOptions po;
@@ -153,6 +156,7 @@ int run_replay(const Config& config, const ReplayOptions& options, std::ostream&
       if (imu_rate) imu_rate->write(m.time, m.position, m.orientation);
       return;
     }
+    if (map_frame && (m.flags & pose::kNotLocalized) == 0) map_frame->write(m.time, m.map_position, m.map_orientation);
     if (pipeline.backend() != nullptr) {
       NavState s;
       s.time = m.time;
@@ -186,7 +190,7 @@ int run_replay(const Config& config, const ReplayOptions& options, std::ostream&
     for (const auto& s : backend->backend().corrected_trajectory(scan_poses)) trajectory.write(s);
     out << backend->summary();
   }
-  const bool complete = close_outputs(trajectory, imu_rate.get(), scan_log, out);
+  const bool complete = close_outputs(trajectory, imu_rate.get(), map_frame.get(), scan_log, out);
   out << "trajectory: " << options.trajectory_tum << (complete ? "" : " (incomplete)") << '\n';
   if (pipeline.totals().processed == 0) {
     spdlog::error("no pose was estimated: check that the IMU log and the pcap cover the same time span");

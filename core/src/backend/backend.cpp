@@ -73,16 +73,73 @@ bool Backend::add_keyframe(const Keyframe& keyframe) {
     f.information = relative_pose_information(b.odometry_translation_sigma_m, b.odometry_rotation_sigma_deg * kDegToRad);
     graph_.add_factor(f);
   }
-  const Eigen::Vector3d up = k.odometry_pose.linear().transpose() * Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d up = map_up_in_body(k.odometry_pose);
   keyframes_.add(std::move(k));
   if (b.tilt_sigma_deg > 0.0) graph_.set_tilt(node, up, b.tilt_sigma_deg * kDegToRad);
   ++stats_.keyframes;
 
+  if (relocalizer_ && (!localized_ || b.mode == BackendMode::kLocalize) && keyframes_.time(node) >= next_attempt_time_) {
+    next_attempt_time_ = keyframes_.time(node) + (localized_ ? b.relocalization.match_interval_s : b.relocalization.interval_s);
+    if (localized_) match_map(node);
+    else relocalize(node);
+  }
+  // Localising, the saved map is the reference: the run's own loops would only repeat it.
+  if (b.mode == BackendMode::kLocalize) return false;
   if (cooldown_ > 0) {
     --cooldown_;
     return false;
   }
-  return search_loop(node);
+  const bool closed = search_loop(node);
+  correction_version_ += closed ? 1 : 0;
+  return closed;
+}
+
+void Backend::use_saved_map(std::unique_ptr<Relocalizer> relocalizer) {
+  const bool has_map = relocalizer && relocalizer->size() > 0;
+  // Mapping, a run without a map to join starts the map; localising, it has nothing to track in.
+  if (!has_map && config_.backend.mode == BackendMode::kMap) return;
+  if (has_map) relocalizer_ = std::move(relocalizer);
+  gate_.emplace(config_.backend.relocalization);
+  localized_ = false;
+}
+
+void Backend::relocalize(std::size_t node) {
+  ++stats_.relocalization_attempts;
+  const auto current = keyframes_.get(node);
+  const auto placement = relocalizer_->place(*current);
+  if (!placement) return;
+  ++stats_.placements;
+  const auto map_from_run = gate_->offer(*placement, graph_.pose(node));
+  if (!map_from_run) return;
+  move_graph(*map_from_run);
+  localized_ = true;
+  stats_.localized_time = keyframes_.time(node);
+  stats_.localized_keyframe = keyframes_.id(node);
+}
+
+void Backend::match_map(std::size_t node) {
+  const auto current = keyframes_.get(node);
+  const auto placement = relocalizer_->match(*current, graph_.pose(node));
+  if (!placement) return;
+  ++stats_.map_matches;
+  move_graph(placement->map_from_body * graph_.pose(node).inverse());
+}
+
+// Moves the whole graph rigidly (its factors are relative, so none changes): the run's frame
+// becomes the map's. The tilt factors follow: the map's up, seen from each body, is the run's up
+// turned by the frames' relative roll and pitch.
+void Backend::move_graph(const Eigen::Isometry3d& delta) {
+  map_from_run_rotation_ = delta.linear() * map_from_run_rotation_;
+  const double sigma = config_.backend.tilt_sigma_deg * kDegToRad;
+  for (std::size_t k = 0; k < graph_.size(); ++k) {
+    graph_.set_pose(k, delta * graph_.pose(k));
+    if (sigma > 0.0) graph_.set_tilt(k, map_up_in_body(keyframes_.odometry_pose(k)), sigma);
+  }
+  ++correction_version_;
+}
+
+Eigen::Vector3d Backend::map_up_in_body(const Eigen::Isometry3d& odometry_pose) const {
+  return (map_from_run_rotation_ * odometry_pose.linear()).transpose() * Eigen::Vector3d::UnitZ();
 }
 
 bool Backend::search_loop(std::size_t current) {

@@ -13,7 +13,6 @@
 #include "liod/voxel_grid.hpp"
 
 namespace liod {
-namespace {
 
 std::vector<Eigen::Vector3d> to_world(const std::vector<Eigen::Vector3f>& body, const Eigen::Isometry3d& pose) {
   std::vector<Eigen::Vector3d> out;
@@ -21,6 +20,8 @@ std::vector<Eigen::Vector3d> to_world(const std::vector<Eigen::Vector3f>& body, 
   for (const auto& p : body) out.push_back(pose * p.cast<double>());
   return out;
 }
+
+namespace {
 
 std::vector<Eigen::Vector3d> to_double(const std::vector<Eigen::Vector3f>& in) {
   std::vector<Eigen::Vector3d> out;
@@ -33,29 +34,17 @@ Eigen::Vector3d up_in_body(const Eigen::Isometry3d& pose) { return pose.linear()
 
 // The candidate's sub-map in the graph's world frame: the candidate's neighbours only, never the
 // recent keyframes of the current pass.
-struct SubMap {
-  std::vector<Eigen::Vector3d> similarity;
-  LocalMap planes;
-  LocalMap edges;
-};
-
 SubMap candidate_submap(KeyframeStore& keyframes, const std::vector<Eigen::Isometry3d>& poses, std::size_t current,
                         std::size_t candidate, const AlgorithmConfig& config) {
   const std::size_t n = static_cast<std::size_t>(config.backend.submap_keyframes);
   const std::size_t first = candidate > n ? candidate - n : 0;
   const std::size_t last = std::min({candidate + n, current - 1, keyframes.size() - 1});
-  LocalMap plane_map(config.odometry.map_voxel_m, config.odometry.map_points_per_voxel,
-                     config.odometry.map_min_point_spacing_m);
-  SubMap submap{{}, plane_map, plane_map};
+  std::vector<PlacedKeyframe> members;
   for (std::size_t k = first; k <= last; ++k) {
     if (keyframes.time(current) - keyframes.time(k) < config.backend.loop_time_gap_s) continue;
-    const auto kf = keyframes.get(k);
-    const auto sim = to_world(kf->similarity, poses[k]);
-    submap.similarity.insert(submap.similarity.end(), sim.begin(), sim.end());
-    submap.planes.add(to_world(kf->planes, poses[k]), kf->id);
-    submap.edges.add(to_world(kf->edges, poses[k]), kf->id);
+    members.push_back({keyframes.get(k), poses[k]});
   }
-  return submap;
+  return make_submap(members, config);
 }
 
 // Scan-to-map registration: the front end's iterated update with a weak prior (a LiDAR-only
@@ -115,28 +104,34 @@ void measure_fit(const std::vector<Eigen::Vector3d>& planes, const LocalMap& pla
 
 }  // namespace
 
-LoopCheck check_loop(KeyframeStore& keyframes, const std::vector<Eigen::Isometry3d>& poses, std::size_t current,
-                     std::size_t candidate, const AlgorithmConfig& config) {
+SubMap make_submap(const std::vector<PlacedKeyframe>& members, const AlgorithmConfig& config) {
+  const LocalMap empty(config.odometry.map_voxel_m, config.odometry.map_points_per_voxel,
+                       config.odometry.map_min_point_spacing_m);
+  SubMap submap{{}, empty, empty};
+  for (const auto& [kf, pose] : members) {
+    const auto sim = to_world(kf->similarity, pose);
+    submap.similarity.insert(submap.similarity.end(), sim.begin(), sim.end());
+    submap.planes.add(to_world(kf->planes, pose), kf->id);
+    submap.edges.add(to_world(kf->edges, pose), kf->id);
+  }
+  return submap;
+}
+
+LoopCheck verify_on_submap(const BackendKeyframe& current, const Eigen::Isometry3d& guess, const SubMap& submap,
+                           const std::vector<Eigen::Vector3d>& candidate_world, const AlgorithmConfig& config) {
   const auto start = std::chrono::steady_clock::now();
   const BackendConfig& b = config.backend;
   LoopCheck check;
-  check.current = current;
-  check.candidate = candidate;
   auto done = [&](LoopOutcome outcome) {
     check.outcome = outcome;
     check.check_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return check;
   };
-  const auto current_kf = keyframes.get(current);
-  const auto candidate_kf = keyframes.get(candidate);
-  const SubMap submap = candidate_submap(keyframes, poses, current, candidate, config);
 
   // 1. Similarity: the scan against the sub-map after a coarse alignment search.
-  const Eigen::Isometry3d guess = poses[current];
   Eigen::Isometry3d initial = guess;
   if (b.similarity_check) {
-    const auto similarity = similarity_search(to_double(current_kf->similarity), guess, submap.similarity,
-                                              to_world(candidate_kf->similarity, poses[candidate]), b);
+    const auto similarity = similarity_search(to_double(current.similarity), guess, submap.similarity, candidate_world, b);
     check.similarity_m = similarity.distance_m;
     check.similarity_forward_m = similarity.forward_m;
     check.similarity_backward_m = similarity.backward_m;
@@ -150,8 +145,8 @@ LoopCheck check_loop(KeyframeStore& keyframes, const std::vector<Eigen::Isometry
   params.lidar_noise_m = config.odometry.lidar_noise_m;
   params.correspondence.max_distance_m = config.odometry.max_correspondence_m;
   params.degeneracy_eigenvalue = config.odometry.degeneracy_eigenvalue;
-  const std::vector<Eigen::Vector3d> planes = voxel_downsample(to_double(current_kf->planes), config.odometry.plane_voxel_m);
-  const std::vector<Eigen::Vector3d> edges = voxel_downsample(to_double(current_kf->edges), config.odometry.edge_voxel_m);
+  const std::vector<Eigen::Vector3d> planes = voxel_downsample(to_double(current.planes), config.odometry.plane_voxel_m);
+  const std::vector<Eigen::Vector3d> edges = voxel_downsample(to_double(current.edges), config.odometry.edge_voxel_m);
   register_on_submap(planes, edges, initial, submap, config.odometry, params, check);
   measure_fit(planes, submap.planes, params.correspondence, 2.0 * b.loop_max_rms_m, check);
   if (!check.converged || check.degenerate_directions > 0 || check.rms_m > b.loop_max_rms_m ||
@@ -159,15 +154,26 @@ LoopCheck check_loop(KeyframeStore& keyframes, const std::vector<Eigen::Isometry
     return done(LoopOutcome::kRegistrationFailed);
   }
 
-  // 3. Vertical check against the graph (not the coarse alignment, which searched z).
+  // 3. Vertical check against the guess (not the coarse alignment, which searched z).
   check.dz_m = check.registered.translation().z() - guess.translation().z();
   const double c = std::clamp(up_in_body(check.registered).dot(up_in_body(guess)), -1.0, 1.0);
   check.tilt_deg = std::acos(c) / kDegToRad;
   if (std::abs(check.dz_m) > b.max_vertical_m || check.tilt_deg > b.max_tilt_deg) {
     return done(LoopOutcome::kVerticalDisagreement);
   }
-  check.measured = poses[candidate].inverse() * check.registered;
   return done(LoopOutcome::kAccepted);
+}
+
+LoopCheck check_loop(KeyframeStore& keyframes, const std::vector<Eigen::Isometry3d>& poses, std::size_t current,
+                     std::size_t candidate, const AlgorithmConfig& config) {
+  const auto candidate_kf = keyframes.get(candidate);
+  const SubMap submap = candidate_submap(keyframes, poses, current, candidate, config);
+  LoopCheck check = verify_on_submap(*keyframes.get(current), poses[current], submap,
+                                     to_world(candidate_kf->similarity, poses[candidate]), config);
+  check.current = current;
+  check.candidate = candidate;
+  if (check.outcome == LoopOutcome::kAccepted) check.measured = poses[candidate].inverse() * check.registered;
+  return check;
 }
 
 LoopCheck check_loop(const std::vector<BackendKeyframe>& keyframes, const std::vector<Eigen::Isometry3d>& poses,

@@ -2,6 +2,9 @@
 // graph_journal.cpp (format, load) and state_writer.cpp (writing).
 #include "liod/backend/map_store.hpp"
 
+#include <algorithm>
+#include <limits>
+#include <sstream>
 #include <system_error>
 
 #include "state_io.hpp"
@@ -69,5 +72,36 @@ void KeyframeDirectory::write(const BackendKeyframe& keyframe) {
 }
 
 BackendKeyframe KeyframeDirectory::read(std::uint64_t id) const { return read_keyframe_file(directory_, id); }
+
+std::vector<std::uint32_t> read_map_runs(const fs::path& directory) {
+  const fs::path path = directory / "map_runs";
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return {0};
+  std::istringstream in(state_io::read_all(path));
+  std::vector<std::uint32_t> runs;
+  std::uint64_t run = 0;
+  while (in >> run) {
+    if (run > std::numeric_limits<std::uint32_t>::max()) throw StateError(path.string() + ": run " + std::to_string(run) + " out of range");
+    runs.push_back(static_cast<std::uint32_t>(run));
+  }
+  if (!in.eof()) throw StateError(path.string() + ": not a list of run numbers");
+  return runs;
+}
+
+void write_map_runs(const fs::path& directory, const std::vector<std::uint32_t>& runs) {
+  std::string text;
+  for (const auto r : runs) text += std::to_string(r) + "\n";
+  write_file_atomically(directory / "map_runs", text);
+}
+
+SavedMap saved_map(const PersistedGraph& graph, const std::vector<std::uint32_t>& map_runs) {
+  SavedMap map;
+  for (const auto& node : graph.nodes) {
+    if (std::find(map_runs.begin(), map_runs.end(), node.run) == map_runs.end()) continue;
+    map.ids.push_back(node.id);
+    map.poses.push_back(node.pose);
+  }
+  return map;
+}
 
 }  // namespace liod

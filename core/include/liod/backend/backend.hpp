@@ -11,12 +11,15 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "liod/backend/keyframe_store.hpp"
 #include "liod/backend/loop_closure.hpp"
 #include "liod/backend/pose_graph.hpp"
+#include "liod/backend/relocalization.hpp"
 #include "liod/algorithm_config.hpp"
 #include "liod/imu_preintegration.hpp"
 #include "liod/keyframe.hpp"
@@ -30,6 +33,11 @@ struct BackendStats {
   std::array<std::size_t, 6> outcomes{};  // per LoopOutcome
   std::vector<double> solve_ms;    // one per full solve
   std::vector<double> check_ms;    // one per candidate verified
+  std::size_t relocalization_attempts = 0;  // keyframes looked up in the saved map
+  std::size_t placements = 0;      // ... placed there (verified; the gate accepts the second that agrees)
+  std::size_t map_matches = 0;     // localise mode: keyframes registered on the map once placed
+  double localized_time = 0.0;     // the keyframe time at which the run was placed in the saved map
+  std::uint64_t localized_keyframe = 0;  // ... and that keyframe's id
 };
 
 class Backend {
@@ -41,6 +49,15 @@ class Backend {
   /// their keyframes (StateWriter::first_keyframe_id()).
   explicit Backend(const AlgorithmConfig& config, std::shared_ptr<KeyframeSpill> spill = nullptr,
                    std::uint64_t first_keyframe_id = 0);
+
+  /// A saved map to continue (backend.mode map) or to track in (localise): until a keyframe is
+  /// placed in it (relocalization.hpp) the run is not localised; then its graph moves into the
+  /// map's frame. An empty map changes nothing (the run's own frame is the map's).
+  void use_saved_map(std::unique_ptr<Relocalizer> relocalizer);
+  /// Whether the correction places the run in the map: always without a saved map.
+  bool localized() const { return localized_; }
+  /// Counts the changes of correction() (loops, the placement in a saved map, map matches).
+  std::uint64_t correction_version() const { return correction_version_; }
 
   /// Adds a keyframe (its points are in the odometry's world frame, as the front end keeps
   /// them); returns true when it closed a loop (and the graph was re-optimised).
@@ -68,6 +85,10 @@ class Backend {
  private:
   bool search_loop(std::size_t current);
   bool close_loop(const LoopCheck& check);
+  void relocalize(std::size_t node);
+  void match_map(std::size_t node);
+  void move_graph(const Eigen::Isometry3d& delta);
+  Eigen::Vector3d map_up_in_body(const Eigen::Isometry3d& odometry_pose) const;
 
   AlgorithmConfig config_;
   PoseGraph graph_;
@@ -76,6 +97,12 @@ class Backend {
   BackendStats stats_;
   int cooldown_ = 0;
   std::uint64_t first_keyframe_id_ = 0;
+  std::unique_ptr<Relocalizer> relocalizer_;
+  std::optional<RelocalizationGate> gate_;
+  bool localized_ = true;
+  double next_attempt_time_ = -std::numeric_limits<double>::infinity();
+  std::uint64_t correction_version_ = 0;
+  Eigen::Matrix3d map_from_run_rotation_ = Eigen::Matrix3d::Identity();  // the moves' rotation so far
 };
 
 }  // namespace liod

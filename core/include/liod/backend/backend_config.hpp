@@ -2,9 +2,45 @@
 // The backend's configuration: loop closure, the pose graph and the state it keeps
 // (docs/backend.md).
 
+#include "liod/backend/scan_context.hpp"
+
 namespace liod {
 
 enum class LoopDistance { k2D, k3D };
+/// map: build the map, continuing a saved one once relocalised in it; localise: track in the saved
+/// map without adding to it (no keyframes persisted, no loops of its own, the map matched instead).
+enum class BackendMode { kMap, kLocalize };
+
+/// Relocalisation in a saved map (relocalization.hpp).
+struct RelocalizationConfig {
+  ScanContextConfig scan_context;
+  // Each saved keyframe is also described as if seen this far to its left and right (Scan
+  // Context++'s augmentation, Kim et al. 2021): the descriptor changes fast with a sideways
+  // offset, and a second drive is often a lane or the opposite carriageway away.
+  double lateral_offset_m = 3.5;
+  int verified_candidates = 3;      // the best places registered per attempt
+  // Scan Context distance beyond which a place is not verified: columns that disagree more than
+  // they agree (a mean angle between height profiles beyond 60 degrees).
+  double max_descriptor_distance = 0.5;
+  double interval_s = 0.5;          // keyframe time between attempts (bounds the backend's load)
+  int submap_keyframes = 15;        // saved keyframes nearest the place form its sub-map
+  // The similarity test's threshold here: another drive sees a place from another lane or
+  // direction, so a true pair's partial Hausdorff distance is larger than a loop's (the same lane
+  // again); registration fit and the two-placement gate carry the rejection of wrong places.
+  double similarity_threshold_m = 2.0;
+  // Without a prior to fall back on, the fit must be a match's, not a look-alike street's: the
+  // residual within about 1.5 LiDAR noise sigmas (the loop's 0.1 m is for a revisit the odometry
+  // already puts nearby). The inlier fraction stays the loop's: a street driven the other way
+  // sees the other faces of what stands in it, and half its plane points find no plane.
+  double max_rms_m = 0.05;
+  double min_inlier_fraction = 0.5;
+  // A placement is accepted when a second one, from a later keyframe at least min_travel_m on,
+  // agrees with it: one registration can fit a repetitive street wrongly, two far apart rarely do.
+  double min_travel_m = 3.0;
+  double agreement_m = 0.3;
+  double agreement_deg = 1.0;
+  double match_interval_s = 1.0;    // localise mode: keyframe time between matches on the map
+};
 
 /// The backend (issue 5): keyframe pose graph, loop closure, maps. See docs/backend.md.
 struct BackendConfig {
@@ -36,6 +72,8 @@ struct BackendConfig {
   double map_voxel_m = 0.3;             // downsampling of the global map PCD
   bool persist = false;                 // write keyframes + graph to output.state_dir (atomically)
   int memory_keyframes = 200;           // keyframe clouds kept in memory (LRU); others on disk; 0 = all in memory
+  BackendMode mode = BackendMode::kMap;
+  RelocalizationConfig relocalization;
 };
 
 }  // namespace liod

@@ -18,8 +18,12 @@
 #include <string>
 #include <vector>
 
+#include <memory>
+#include <utility>
+
 #include "liod/backend/keyframe_store.hpp"
 #include "liod/algorithm_config.hpp"
+#include "liod/local_map.hpp"
 
 namespace liod {
 
@@ -80,6 +84,30 @@ struct LoopCheck {
   Eigen::Isometry3d registered = Eigen::Isometry3d::Identity();  // T_world_current from the registration
   Eigen::Isometry3d measured = Eigen::Isometry3d::Identity();    // T_candidate_current (the factor)
 };
+
+/// Body-frame points (a keyframe's clouds) at a pose in the world frame.
+std::vector<Eigen::Vector3d> to_world(const std::vector<Eigen::Vector3f>& body, const Eigen::Isometry3d& pose);
+
+/// A keyframe at a pose in the world frame.
+struct PlacedKeyframe {
+  std::shared_ptr<const BackendKeyframe> keyframe;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+};
+
+/// A neighbourhood of keyframes in the world frame: the map a keyframe is registered on.
+struct SubMap {
+  std::vector<Eigen::Vector3d> similarity;
+  LocalMap planes;
+  LocalMap edges;
+};
+SubMap make_submap(const std::vector<PlacedKeyframe>& members, const AlgorithmConfig& config);
+
+/// Steps 2-4 for `current` near `guess` (T_world_body) on `submap`: the similarity test (if
+/// enabled) against the sub-map and `candidate_world` (the candidate's similarity cloud in the
+/// world frame), registration, fit limits, and the vertical check against the guess. Fills the
+/// outcome, the figures and `registered`; not the node indices nor `measured`.
+LoopCheck verify_on_submap(const BackendKeyframe& current, const Eigen::Isometry3d& guess, const SubMap& submap,
+                           const std::vector<Eigen::Vector3d>& candidate_world, const AlgorithmConfig& config);
 
 /// Verifies one candidate: similarity (if enabled), registration of the current keyframe's
 /// body points into the candidate's sub-map, fit limits, vertical check. `poses` are the graph's

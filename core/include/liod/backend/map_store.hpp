@@ -11,7 +11,9 @@
 //  - `journal.bin`: what happened since that snapshot, append-only, one CRC-32 per record (a
 //    keyframe's node, an odometry or loop factor, an optimised-pose update); a torn last record
 //    (a crash mid-append) is dropped on load, a corrupt one earlier is an error. When it outgrows
-//    a multiple of the snapshot's size it is compacted: a new snapshot, then a fresh journal.
+//    a multiple of the snapshot's size it is compacted: a new snapshot, then a fresh journal;
+//  - `map_runs`: the runs whose poses are in the map's frame (the first, and those relocalised in
+//    it), written only after their moved poses are durable in the journal.
 // Ordering: every file the journal or the snapshot names is on disk before the record that
 // names it (one sync per keyframe covers the keyframe file and the previous records), so a
 // loaded state never names a missing keyframe file.
@@ -29,6 +31,7 @@
 
 #include "liod/backend/keyframe_store.hpp"
 #include "liod/backend/pose_graph.hpp"
+#include "liod/backend/relocalization.hpp"
 
 namespace liod {
 
@@ -124,6 +127,15 @@ struct PersistedState {
 /// Loads and validates a state directory: the graph (load_graph) and every keyframe it names.
 /// Throws StateError naming the file when one is missing, truncated, corrupt or inconsistent.
 PersistedState load_state(const std::filesystem::path& directory);
+
+/// The runs whose poses are in the map's frame (`map_runs`, one number per line): the run that
+/// started the map and every run placed in it since; the others' poses are in their own frames.
+/// A directory without the file holds one map, its first run's: {0}. Throws StateError.
+std::vector<std::uint32_t> read_map_runs(const std::filesystem::path& directory);
+/// Replaces `map_runs` atomically. Throws StateError.
+void write_map_runs(const std::filesystem::path& directory, const std::vector<std::uint32_t>& runs);
+/// The keyframes of `graph` in the map's frame, the map a new run relocalises in.
+SavedMap saved_map(const PersistedGraph& graph, const std::vector<std::uint32_t>& map_runs);
 
 struct StateWriterOptions {
   /// The journal is compacted into a new snapshot when it exceeds this multiple of the

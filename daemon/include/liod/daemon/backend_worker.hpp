@@ -27,6 +27,9 @@ class StateWriter;
 struct MapCorrection {
   Eigen::Isometry3d map_from_odom = Eigen::Isometry3d::Identity();
   std::uint32_t sequence = 0;
+  /// False while a saved map waits for the run to be placed in it (the map frame is then the
+  /// run's own, flagged not_localized on the socket).
+  bool localized = true;
 };
 
 struct BackendWorkerOptions {
@@ -56,12 +59,16 @@ class BackendWorker {
 
  private:
   void save_state();
+  void publish_correction();
+  void record_map_run();
 
   Config config_;
   BackendWorkerOptions options_;
   std::unique_ptr<StateWriter> writer_;
   Backend backend_;
   bool state_frozen_ = false;
+  bool map_run_recorded_ = false;  // this run is in map_runs
+  std::uint64_t published_version_ = 0;
   mutable std::mutex correction_mutex_;
   MapCorrection correction_;
 };

@@ -29,12 +29,13 @@ struct GlobalMap {
   std::vector<Eigen::Vector3d> points;
   std::size_t keyframes = 0;
   std::uint32_t runs = 0;
+  std::size_t runs_left_out_keyframes = 0;  // keyframes of runs not in the map's frame
   std::vector<std::string> notes;  // what loading the graph recovered from (PersistedGraph::notes)
 };
 
-/// Every keyframe of every run in `state_dir` (planes and edges) at its optimised pose, merged
-/// and voxel-downsampled as it goes (one keyframe file in memory at a time). Each run's points
-/// are in that run's world frame. Throws StateError when the directory cannot be read.
+/// Every keyframe in `state_dir` of the runs in the map's frame (map_runs: the first and those
+/// relocalised in it; planes and edges) at its optimised pose, merged and voxel-downsampled as it
+/// goes (one keyframe file in memory at a time). Throws StateError when the directory cannot be read.
 GlobalMap global_map_from_state(const std::filesystem::path& state_dir, double voxel_m);
 
 /// `liod map export`: prints a summary line to `out`; returns 0, or 1 after printing the error.

@@ -65,7 +65,7 @@ enum Flag : std::uint32_t {
   kCalibrationChanged = 1U << 11,  ///< the LiDAR's DIFOP disagreed with the calibration in use, or a new one began
   kImuSaturated = 1U << 12,    ///< an IMU sample since the previous pose clipped at the sensor's range
   kStale = 1U << 13,           ///< published more than pose_socket.stale_after_s after its input arrived (live)
-  kNotLocalized = 1U << 14,    ///< the map-frame pose is the odometry's: no backend places it in a map
+  kNotLocalized = 1U << 14,    ///< the map-frame pose is the odometry's: no backend, or not yet placed in the saved map
 };
 
 struct PoseMessage {

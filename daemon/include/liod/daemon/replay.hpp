@@ -16,6 +16,7 @@ struct ReplayOptions {
   std::string imu_csv;
   std::string trajectory_tum;      // scan-rate body poses
   std::string imu_rate_tum;        // optional: IMU-rate propagated poses
+  std::string map_frame_tum;       // optional: scan-rate map-frame poses as published (localised ones)
   std::string scan_log_csv;        // optional: per-scan status, features, timings
   bool progress = false;           // a progress bar on stderr
   double pace = 0.0;               // 0 = as fast as possible; 1 = recorded pace
