@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "liod/calibration/extrinsic_calibration.hpp"
+#include "liod/daemon/extrinsics_check.hpp"
 #include "liod/daemon/pipeline.hpp"
 #include "liod/daemon/sources.hpp"
 #include "liod/drivers/imu_csv.hpp"
@@ -24,8 +25,8 @@ namespace {
 constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
 
 /// The drive through the odometry (as `liod replay`, as fast as possible, no backend): the
-/// LiDAR's world poses of the scans flagged ok, body pose times the configured extrinsic, on the
-/// IMU clock.
+/// LiDAR's world poses of the scans that show its motion (shows_lidar_motion), body pose times
+/// the configured extrinsic, on the IMU clock.
 std::vector<calibration::LidarPose> lidar_poses(Config config, const CalibrateOptions& options) {
   config.backend.enabled = false;
   config.backend.persist = false;
@@ -43,8 +44,7 @@ std::vector<calibration::LidarPose> lidar_poses(Config config, const CalibrateOp
   std::vector<calibration::LidarPose> poses;
   pipeline.add_sink([&](const PoseEvent& ev) {
     const auto& m = ev.message;
-    // Only the poses a controller could use: a degenerate or blinded scan's pose is not the LiDAR's motion.
-    if (m.type == pose::MessageType::ImuPose || (m.flags & pose::kOk) == 0) return;
+    if (m.type == pose::MessageType::ImuPose || !shows_lidar_motion(m.flags)) return;
     const Eigen::Matrix3d r_wb = m.orientation.toRotationMatrix();
     poses.push_back({m.time, r_wb * r_bl, m.position + r_wb * t_bl});
   });

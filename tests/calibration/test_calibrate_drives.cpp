@@ -1,7 +1,7 @@
 // `liod calibrate` on simulated drives whose true LiDAR-IMU extrinsic and clock offset are known
 // (liod-sim's extrinsics.yaml) while liod is given a wrong one: the command recovers the truth,
-// the odometry with its estimate is as accurate as with the truth, and a drive without turns is
-// refused. One test per drive (each test is a process of its own under ctest).
+// the odometry with its estimate is as accurate as with the truth, the daemon's start-up check
+// flags the wrong config only, and a drive without turns is refused. One test per drive (each test is a process of its own under ctest).
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -14,9 +14,16 @@
 #include <string>
 #include <sys/wait.h>
 
+#include <chrono>
+#include <memory>
+#include <thread>
+
 #include "liod/config.hpp"
 #include "liod/daemon/calibrate_command.hpp"
-#include "liod/daemon/replay.hpp"
+#include "liod/daemon/pipeline.hpp"
+#include "liod/daemon/pose_protocol.hpp"
+#include "liod/daemon/sources.hpp"
+#include "liod/daemon/trajectory_writer.hpp"
 #include "liod/eval/evaluate.hpp"
 #include "liod/eval/io.hpp"
 #include "scratch_dir.hpp"
@@ -71,18 +78,43 @@ Calibrated run_calibrate(const fs::path& drive, const fs::path& wrong, const fs:
   return c;
 }
 
-double replay_ate(const fs::path& drive, const std::vector<fs::path>& extrinsics, const fs::path& tum) {
+struct Replayed {
+  double ate = 0.0;
+  std::size_t suspect_scans = 0;  // scan poses flagged extrinsics_suspect
+};
+
+/// The drive through the pipeline as `liod replay` runs it, with the start-up check of the
+/// extrinsics after `check_s` (the drives are a minute long, the default check comes at 60 s).
+Replayed replay(const fs::path& drive, const std::vector<fs::path>& extrinsics, const fs::path& tum, double check_s) {
   auto files = base_configs();
   for (const auto& f : extrinsics) files.push_back(f.string());
-  liod::ReplayOptions o;
-  o.pcap = (drive / "lidar.pcap").string();
-  o.imu_csv = (drive / "imu.csv").string();
-  o.trajectory_tum = tum.string();
-  std::ostringstream out;
-  EXPECT_EQ(liod::run_replay(liod::load_config(files), o, out), 0) << out.str();
-  return liod::eval::evaluate(liod::eval::read_tum((drive / "groundtruth.tum").string()),
-                              liod::eval::read_tum(o.trajectory_tum), liod::eval::EvalOptions{})
-      .ate.translation.rmse;
+  liod::Config config = liod::load_config(files);
+  config.odometry.extrinsics_check_s = check_s;
+  const std::vector<std::uint16_t> ports{static_cast<std::uint16_t>(config.lidar.msop_port),
+                                         static_cast<std::uint16_t>(config.lidar.difop_port)};
+  liod::PipelineOptions po;
+  po.ordering = liod::Ordering::Lockstep;
+  po.imu_rate_poses = false;
+  po.realtime_threads = false;
+  liod::Pipeline pipeline(config, po);
+  liod::TrajectoryWriter writer(tum.string());
+  Replayed r;
+  pipeline.add_sink([&](const liod::PoseEvent& ev) {
+    if (ev.message.type != liod::pose::MessageType::ScanPose) return;
+    writer.write(ev.message.time, ev.message.position, ev.message.orientation);
+    r.suspect_scans += (ev.message.flags & liod::pose::kExtrinsicsSuspect) != 0;
+  });
+  auto pace = std::make_shared<liod::PaceClock>();
+  pipeline.start(std::make_unique<liod::PcapLidarSource>((drive / "lidar.pcap").string(), ports, pace),
+                 std::make_unique<liod::CsvImuSource>((drive / "imu.csv").string(), pace));
+  while (!pipeline.finished() && pipeline.error().empty()) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  pipeline.join();
+  EXPECT_EQ(pipeline.error(), "");
+  EXPECT_TRUE(writer.close());
+  r.ate = liod::eval::evaluate(liod::eval::read_tum((drive / "groundtruth.tum").string()), liod::eval::read_tum(tum.string()),
+                               liod::eval::EvalOptions{})
+              .ate.translation.rmse;
+  return r;
 }
 
 /// The whole check on one drive: liod is given the truth off by `angle_deg` about `axis`,
@@ -106,9 +138,19 @@ void check_drive(const fs::path& drive, const Eigen::Vector3d& axis, double angl
   const Eigen::Vector3d translation_error = est.lidar_to_imu_translation - truth.lidar_to_imu_translation;
   const double offset_error_ms = (est.lidar_time_offset_s - truth.lidar_time_offset_s) * 1e3;
 
-  const double ate_truth = replay_ate(drive, {truth_file}, scratch.path() / "truth.tum");
-  const double ate_estimate = replay_ate(drive, {wrong, fragment}, scratch.path() / "estimate.tum");
-  const double ate_wrong = replay_ate(drive, {wrong}, scratch.path() / "wrong.tum");
+  // The daemon's start-up check after 40 s: silent with the truth and the estimate, flags the wrong config.
+  constexpr double kCheckS = 40.0;
+  const Replayed truth_run = replay(drive, {truth_file}, scratch.path() / "truth.tum", kCheckS);
+  const Replayed estimate_run = replay(drive, {wrong, fragment}, scratch.path() / "estimate.tum", kCheckS);
+  const Replayed wrong_run = replay(drive, {wrong}, scratch.path() / "wrong.tum", kCheckS);
+  const double ate_truth = truth_run.ate;
+  const double ate_estimate = estimate_run.ate;
+  const double ate_wrong = wrong_run.ate;
+  std::cout << "[ calibration ] start-up check: scans flagged extrinsics_suspect with the truth " << truth_run.suspect_scans
+            << ", the estimate " << estimate_run.suspect_scans << ", the wrong config " << wrong_run.suspect_scans << std::endl;
+  EXPECT_EQ(truth_run.suspect_scans, 0U);
+  EXPECT_EQ(estimate_run.suspect_scans, 0U);
+  EXPECT_GT(wrong_run.suspect_scans, 50U);  // from the check (~42 s) to the drive's end
   std::cout << std::fixed << std::setprecision(4) << "[ calibration ] error: rotation " << rotation_error_deg
             << " deg, translation " << translation_error.x() * 100 << ", " << translation_error.y() * 100 << ", "
             << translation_error.z() * 100 << " cm, offset " << offset_error_ms << " ms; ATE with the truth " << ate_truth
