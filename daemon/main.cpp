@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "liod/config.hpp"
+#include "liod/daemon/calibrate_command.hpp"
 #include "liod/daemon/decode_command.hpp"
 #include "liod/daemon/logging.hpp"
 #include "liod/daemon/map_export.hpp"
@@ -46,6 +47,9 @@ struct Commands {
   std::string pose_format = "text";
   CLI::App* map_export = nullptr;
   liod::MapExportOptions map_export_options;
+  CLI::App* calibrate = nullptr;
+  std::vector<std::string> calibrate_configs;
+  liod::CalibrateOptions calibrate_options;
 };
 
 liod::PoseFormat pose_format(const std::string& name) {
@@ -78,6 +82,14 @@ void add_offline_commands(CLI::App& app, Commands& c) {
   r.progress = true;
   c.replay->add_option("--pace", r.pace, "replay at this multiple of the recorded pace (1 = as recorded); default: as fast as possible, deterministic")->check(CLI::Range(0.0, 1000.0));
   c.replay->add_option("--pose-socket", r.pose_socket, "also serve the poses on this Unix socket (see docs/pose-protocol.md)");
+
+  c.calibrate = app.add_subcommand("calibrate", "Estimate the LiDAR-IMU extrinsic and time offset from a recorded drive with turns");
+  auto& k = c.calibrate_options;
+  c.calibrate->add_option("--config", c.calibrate_configs, "configuration file(s), later ones override; their extrinsics are the starting guess")->required()->check(CLI::ExistingFile);
+  c.calibrate->add_option("--pcap", k.pcap, "LiDAR packets (pcap or pcapng)")->required()->check(CLI::ExistingFile);
+  c.calibrate->add_option("--imu", k.imu_csv, "IMU log (CSV, see README)")->required()->check(CLI::ExistingFile);
+  c.calibrate->add_option("--out", k.out, "output: the extrinsics as a config fragment (YAML)")->required();
+  c.calibrate->add_option("--passes", k.passes, "odometry passes, each with the previous estimate")->capture_default_str()->check(CLI::Range(1, 10));
 }
 
 void add_map_commands(CLI::App& app, Commands& c) {
@@ -130,6 +142,7 @@ int dispatch(Commands& c, const std::string& log_level) {
   if (*c.decode) return liod::run_decode(c.decode_options, std::cout);
   if (*c.map_export) return liod::run_map_export(c.map_export_options, std::cout);
   if (*c.replay) return liod::run_replay(load(c.replay_configs, log_level), c.replay_options, std::cout);
+  if (*c.calibrate) return liod::run_calibrate(load(c.calibrate_configs, log_level), c.calibrate_options, std::cout);
   if (*c.run) return liod::run_daemon(load(c.run_configs, log_level), c.run_options);
   if (*c.record) return liod::run_daemon(load(c.record_configs, log_level), c.record_options);
   if (*c.pose) {

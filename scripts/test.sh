@@ -66,13 +66,13 @@ bash scripts/check-package.sh build
 # AddressSanitizer + UndefinedBehaviorSanitizer: every test, except LiveVsReplay at 5x pace (the
 # recorded pace runs the same code), BackendLoad and Overload (they assert what the odometry does
 # when it keeps the recorded pace or falls behind by a set amount: under ASan, sharing 2 cores, it
-# misses the pace by itself) and the map frame's 70 s loop drive (whose code the other pipeline
-# tests run); of the fault-injection drives, those whose faults reach the decoders and the IMU-gap
+# misses the pace by itself), the map frame's 70 s loop drive (whose code the other pipeline
+# tests run) and `liod calibrate` on its three drives (its math runs sanitized on synthetic motion); of the fault-injection drives, those whose faults reach the decoders and the IMU-gap
 # path (all take ~17 CPU-minutes under ASan; the Release tree runs them all).
 # The same tree builds the libFuzzer targets. Its tests read the simulated drives the Release
 # tests made (LIOD_TEST_DRIVES, tests/support/test_env.hpp): a clang-built liod-sim draws its
 # random worlds in another order than the gcc-built one the tests' bounds were set on.
-sanitized=(test_drivers test_core test_config test_odometry test_backend test_eval test_sim test_daemon)
+sanitized=(test_drivers test_core test_config test_odometry test_backend test_eval test_sim test_daemon test_calibration)
 sanitized_faults='FaultInjection\.(GarbageIn20|ImuCutFive)'
 
 stage "ASan + UBSan build"
@@ -86,7 +86,7 @@ unsanitized_faults=$(cd build-asan && ctest -N -L '^test_fault$' | sed -n 's/^ *
   { grep -Ev "$sanitized_faults" || true; } | paste -sd'|')
 (cd build-asan && export ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 LIOD_TEST_DRIVES="$PWD/../build" &&
    ctest --output-on-failure -j"$jobs" -L "^($(IFS='|'; echo "${sanitized[*]}")|test_fault)\$" \
-     -E "^(LiveVsReplay\.FiveTimesPace|BackendLoad\..*|Overload\..*|MapFrame\.Corrections.*|$unsanitized_faults)\$")
+     -E "^(LiveVsReplay\.FiveTimesPace|BackendLoad\..*|Overload\..*|MapFrame\.Corrections.*|CalibrateDrive\..*|$unsanitized_faults)\$")
 
 # libFuzzer: a short run of every fuzz target (scripts/fuzz.sh 60 is the long run).
 stage "libFuzzer"

@@ -66,9 +66,10 @@ enum liod_pose_flag {
   LIOD_FLAG_CALIBRATION_CHANGED = 1u << 11,
   LIOD_FLAG_IMU_SATURATED = 1u << 12,
   LIOD_FLAG_STALE = 1u << 13,        /* published long after its input arrived: not ok */
-  LIOD_FLAG_NOT_LOCALIZED = 1u << 14 /* the map-frame pose is the odometry pose: no backend */
+  LIOD_FLAG_NOT_LOCALIZED = 1u << 14, /* the map-frame pose is the odometry pose: no backend */
+  LIOD_FLAG_EXTRINSICS_SUSPECT = 1u << 15 /* the configured LiDAR-IMU extrinsic or time offset looks off */
 };
-#define LIOD_FLAG_COUNT 15
+#define LIOD_FLAG_COUNT 16
 
 /* A pose message's body (types 1 and 2), in the protocol's units and frames. */
 struct liod_pose {
@@ -132,7 +133,8 @@ static inline const char* liod_flag_name(int bit) {
   static const char* const names[LIOD_FLAG_COUNT] = {
       "initializing", "ok",          "degenerate",      "imu_lost",            "lidar_lost",
       "keyframe",     "few_features", "clock_jump",     "imu_inconsistent",    "implausible",
-      "sweep_truncated", "calibration_changed", "imu_saturated", "stale",            "not_localized"};
+      "sweep_truncated", "calibration_changed", "imu_saturated", "stale",            "not_localized",
+      "extrinsics_suspect"};
   return bit >= 0 && bit < LIOD_FLAG_COUNT ? names[bit] : NULL;
 }
 

@@ -60,6 +60,7 @@ class Flag(enum.IntFlag):
     IMU_SATURATED = 1 << 12
     STALE = 1 << 13
     NOT_LOCALIZED = 1 << 14
+    EXTRINSICS_SUSPECT = 1 << 15
 
 
 def flag_names(flags: int) -> str:

@@ -50,6 +50,7 @@ void declare_front_end(Schema& s, FrontEndConfig& c) {
   s.vector3("odometry.forward_axis", &o.forward_axis, 1.0);
   s.vector3("odometry.up_axis", &o.up_axis, 1.0);
   s.real("odometry.vertical_velocity_std_mps", &o.vertical_velocity_std_mps, 0.0, 10.0);
+  s.real("odometry.extrinsics_check_s", &o.extrinsics_check_s, 0.0, 3600.0);
   s.real("odometry.occlusion_jump_m", &o.occlusion_jump_m, 0.01, 10.0);
   s.real("odometry.edge_curvature", &o.edge_curvature, 0.0, 10.0);
   s.real("odometry.plane_curvature", &o.plane_curvature, 0.0, 10.0);

@@ -12,6 +12,7 @@
 #include <deque>
 #include <sstream>
 
+#include "liod/daemon/extrinsics_check.hpp"
 #include "liod/daemon/pose_server.hpp"
 
 namespace liod {
@@ -366,6 +367,7 @@ struct Pipeline::OdometryLoop {
   std::int64_t imu_arrival_ns = 0;
   std::int64_t max_lag_ns = 0;
   std::uint32_t carried_flags = 0;
+  std::unique_ptr<ExtrinsicsCheck> extrinsics_check;  // null: odometry.extrinsics_check_s is 0
   bool started = false;
   bool kept_up = false;
   bool skipping = false;
@@ -377,6 +379,7 @@ struct Pipeline::OdometryLoop {
 
 void Pipeline::feed_imu(OdometryLoop& loop, const ImuItem& item) {
   loop.odometry.add_imu(item.sample);
+  if (loop.extrinsics_check) loop.extrinsics_check->add_imu(item.sample);
   ++totals_.imu_fed;
   odometry_imu_dropped_.store(loop.odometry.dropped_imu_samples(), std::memory_order_relaxed);
   loop.last_gyro = item.sample.gyro;
@@ -419,6 +422,10 @@ void Pipeline::process_scan(OdometryLoop& loop, ScanItem& item) {
   loop.carried_flags = 0;
   if (loop.last_saturated > loop.previous_scan_time) f |= pose::kImuSaturated;
   loop.previous_scan_time = result->state.time;
+  if (loop.extrinsics_check && loop.extrinsics_check->add_scan(result->state.time, result->state.rotation,
+                                                               result->state.position, f)) {
+    f |= pose::kExtrinsicsSuspect;
+  }
   ev.message.flags = with_ok(f);
   place_in_map(ev.message);
   ev.diagnostics = scan_diagnostics(*result, item.features_ms);
@@ -432,7 +439,7 @@ void Pipeline::process_scan(OdometryLoop& loop, ScanItem& item) {
     // they are flagged so; before any speed is known (the first scan) there are none: dead
     // reckoning at zero speed from a rolling start would run away.
     const ScanAnchor anchor{result->state, loop.odometry.gravity(), ev.message.covariance,
-                            (scan_flags & kInheritedFlags) | (f & (pose::kSweepTruncated | pose::kCalibrationChanged))};
+                            (scan_flags & kInheritedFlags) | (f & (pose::kSweepTruncated | pose::kCalibrationChanged | pose::kExtrinsicsSuspect))};
     if (loop.lockstep) propagator_.set_anchor(anchor);
     else anchors_.publish(anchor);
   }
@@ -559,6 +566,14 @@ void Pipeline::odometry_thread() {
   loop.imu_poses = options_.imu_rate_poses;
   loop.imu_wait_ns = static_cast<std::int64_t>(config_.time.imu_wait_s * 1e9);
   loop.max_lag_ns = static_cast<std::int64_t>(config_.threads.scan_max_lag_s * 1e9);
+  if (config_.odometry.extrinsics_check_s > 0.0) {
+    ExtrinsicsCheckConfig check;
+    check.window_s = config_.odometry.extrinsics_check_s;
+    check.up_axis = config_.odometry.up_axis;
+    // A replay in lockstep gives the same poses on every run: the check runs in line there.
+    check.background = !loop.lockstep;
+    loop.extrinsics_check = std::make_unique<ExtrinsicsCheck>(config_.extrinsics, check);
+  }
   while (!stop_.load(std::memory_order_relaxed)) {
     hb_odometry_.beat(steady_ns());
     bool done = false;

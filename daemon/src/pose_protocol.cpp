@@ -95,7 +95,7 @@ std::string flag_names(std::uint32_t flags) {
   static const char* kNames[] = {"initializing", "ok",           "degenerate", "imu_lost",        "lidar_lost",
                                  "keyframe",     "few_features", "clock_jump", "imu_inconsistent", "implausible",
                                  "sweep_truncated", "calibration_changed", "imu_saturated", "stale",
-                                 "not_localized"};
+                                 "not_localized", "extrinsics_suspect"};
   std::string s;
   for (int i = 0; i < static_cast<int>(std::size(kNames)); ++i) {
     if ((flags & (1U << i)) == 0 || *kNames[i] == '\0') continue;

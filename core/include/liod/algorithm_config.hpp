@@ -64,6 +64,9 @@ struct OdometryConfig {
   /// Std of the velocity along up_axis (a wheeled vehicle does not move along it; suspension and
   /// bumps do a little). Ties the pitch to the direction of travel. 0: constraint off.
   double vertical_velocity_std_mps = 0.05;
+  /// Seconds of scan poses after which the daemon checks the configured extrinsics against an
+  /// estimate from them, once (daemon/extrinsics_check.hpp); 0: no check.
+  double extrinsics_check_s = 60.0;
   double occlusion_jump_m = 0.5;     // neighbour range jump that marks an occlusion edge (scaled by range)
   double edge_curvature = 0.1;       // c above this: edge candidate
   double plane_curvature = 0.05;     // c below this: planar candidate

@@ -2,10 +2,12 @@
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "liod/sim/simulator.hpp"
 
@@ -48,6 +50,17 @@ int main(int argc, char** argv) {
   auto* route_seed_option = app.add_option("--route-seed", route_seed,
                                            "urban, loop: another route through the seed's world (same duration and max "
                                            "speed), from a random street and heading");
+  std::vector<double> rpy_deg;
+  std::vector<double> translation_m;
+  double time_offset_s = 0.0;
+  app.add_option("--extrinsic-rotation-deg", rpy_deg, "true LiDAR-to-IMU rotation r,p,y in degrees (R = Rz Ry Rx), instead of the seed's")
+      ->delimiter(',')
+      ->expected(3);
+  app.add_option("--extrinsic-translation-m", translation_m, "true LiDAR-to-IMU translation x,y,z in m, instead of the seed's")
+      ->delimiter(',')
+      ->expected(3);
+  auto* offset_option =
+      app.add_option("--time-offset-s", time_offset_s, "true LiDAR clock offset (t_imu = t_lidar + offset), instead of the seed's");
   CLI11_PARSE(app, argc, argv);
   if (route_seed_option->count() > 0) cfg.scene.route_seed = route_seed;
 
@@ -88,6 +101,30 @@ int main(int argc, char** argv) {
   if (!std::filesystem::is_directory(cfg.out_dir)) {
     std::fprintf(stderr, "liod-sim: output directory '%s' does not exist\n", cfg.out_dir.c_str());
     return 2;
+  }
+  if (!rpy_deg.empty()) {
+    if (rpy_deg.size() != 3 || std::abs(rpy_deg[0]) > 180.0 || std::abs(rpy_deg[1]) > 90.0 || std::abs(rpy_deg[2]) > 180.0) {
+      std::fprintf(stderr, "liod-sim: --extrinsic-rotation-deg takes r,p,y with |r|, |y| <= 180 and |p| <= 90\n");
+      return 2;
+    }
+    cfg.extrinsic_rpy_deg = Eigen::Vector3d(rpy_deg[0], rpy_deg[1], rpy_deg[2]);
+  }
+  if (!translation_m.empty()) {
+    if (translation_m.size() != 3 || std::abs(translation_m[0]) > 5.0 || std::abs(translation_m[1]) > 5.0 ||
+        std::abs(translation_m[2]) > 5.0) {
+      std::fprintf(stderr, "liod-sim: --extrinsic-translation-m takes x,y,z within 5 m of the IMU\n");
+      return 2;
+    }
+    cfg.extrinsic_translation_m = Eigen::Vector3d(translation_m[0], translation_m[1], translation_m[2]);
+  }
+  if (*offset_option) {
+    // The true trajectory starts 30 ms before t = 0, where the first firing of a LiDAR clock
+    // ahead of the IMU's falls.
+    if (!(time_offset_s >= -0.025) || time_offset_s > 0.5) {
+      std::fprintf(stderr, "liod-sim: --time-offset-s must be in [-0.025, 0.5] s, got %g\n", time_offset_s);
+      return 2;
+    }
+    cfg.time_offset_s = time_offset_s;
   }
   cfg.scene.route = *kind;
   cfg.scene.start = rolling ? liod::sim::StartMode::Rolling

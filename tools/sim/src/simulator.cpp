@@ -44,6 +44,13 @@ Simulation::Simulation(SimConfig config) : config_(std::move(config)) {
   imu_from_lidar_.rotation = rotation_from_euler(roll, pitch, yaw);
   time_offset_ = rng.uniform(0.002, 0.006);
   az_start_step_ = rng.uniform_int(0, kBlocksPerRev - 1);
+  // Overrides come after every draw, so that the rest of the drive stays the seed's.
+  if (config_.extrinsic_translation_m) imu_from_lidar_.translation = *config_.extrinsic_translation_m;
+  if (config_.extrinsic_rpy_deg) {
+    const Eigen::Vector3d& rpy = *config_.extrinsic_rpy_deg;
+    imu_from_lidar_.rotation = rotation_from_euler(rpy.x() * kDeg, rpy.y() * kDeg, rpy.z() * kDeg);
+  }
+  if (config_.time_offset_s) time_offset_ = *config_.time_offset_s;
 
   lidar_params_.dual_return = config_.dual_return;
   lidar_noise_.enabled = config_.noise;
@@ -78,7 +85,8 @@ RunReport Simulation::write_lidar(const std::string& path,
 
   Rng net(derive_seed(config_.scene.seed, kNetStream));
   const std::uint64_t epoch_us = static_cast<std::uint64_t>(config_.epoch_s) * 1000000U;
-  const auto offset_us = static_cast<std::uint64_t>(std::llround(time_offset_ * 1e6));
+  // Signed: a LiDAR clock ahead of the IMU's has a negative offset.
+  const std::int64_t offset_us = std::llround(time_offset_ * 1e6);
   std::uint64_t last_record_us = 0;
   std::uint32_t counter = 0;
   double next_difop = 0.3;
@@ -88,7 +96,8 @@ RunReport Simulation::write_lidar(const std::string& path,
   auto arrival = [&](std::uint64_t sent_lidar_us) {
     // Host clock = IMU clock; the packet leaves once complete and crosses a switch.
     const double latency_us = 180.0 + net.exponential(35.0);
-    std::uint64_t t = epoch_us + sent_lidar_us + offset_us + static_cast<std::uint64_t>(latency_us);
+    std::uint64_t t = static_cast<std::uint64_t>(static_cast<std::int64_t>(epoch_us + sent_lidar_us) + offset_us) +
+                      static_cast<std::uint64_t>(latency_us);
     t = std::max(t, last_record_us + 11);  // 1290 bytes at 1 Gbit/s
     last_record_us = t;
     return t;

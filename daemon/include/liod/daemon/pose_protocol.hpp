@@ -66,6 +66,7 @@ enum Flag : std::uint32_t {
   kImuSaturated = 1U << 12,    ///< an IMU sample since the previous pose clipped at the sensor's range
   kStale = 1U << 13,           ///< published more than pose_socket.stale_after_s after its input arrived (live)
   kNotLocalized = 1U << 14,    ///< the map-frame pose is the odometry's: no backend, or not yet placed in the saved map
+  kExtrinsicsSuspect = 1U << 15,  ///< the start-up check found the configured LiDAR-IMU extrinsic or time offset off (extrinsics_check.hpp)
 };
 
 struct PoseMessage {

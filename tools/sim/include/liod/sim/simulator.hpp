@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "liod/sim/drive.hpp"
@@ -30,6 +31,11 @@ struct SimConfig {
   std::string angles_csv;
   std::string out_dir;
   std::int64_t epoch_s = 1700000000;  // IMU-clock time of the run's t = 0 (UTC seconds)
+  // The mounting the seed draws, replaced where set: a drive whose true LiDAR-IMU extrinsic or
+  // clock offset is a chosen one (calibration tests). Roll, pitch, yaw in degrees (R = Rz Ry Rx).
+  std::optional<Eigen::Vector3d> extrinsic_rpy_deg;
+  std::optional<Eigen::Vector3d> extrinsic_translation_m;
+  std::optional<double> time_offset_s;
 };
 
 struct RunReport {
