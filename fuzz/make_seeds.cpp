@@ -11,6 +11,7 @@
 #include <linux/can.h>
 
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -22,6 +23,7 @@
 #include <vector>
 
 #include "liod/daemon/pose_protocol.hpp"
+#include "liod/drivers/byte_order.hpp"
 #include "liod/drivers/can_imu.hpp"
 #include "liod/drivers/mtdata2.hpp"
 #include "liod/drivers/pcap_reader.hpp"
@@ -256,6 +258,22 @@ void text_seeds(SeedWriter& out) {
   out.write("fuzz_imu_csv", "sim-imu.csv", imu);
   out.write("fuzz_angles_csv", "comments-tabs-crlf.csv",
             std::string("# vertical_deg, horizontal_deg\r\n 14.94,\t-4.07\r\n\r\n13.03 , 3.63\r\n-54.6,4.8\n"));
+  // Layout byte, then records: a KITTI-like sweep (x, y, z, reflectance) and a timed one.
+  Bytes kitti{0};
+  Bytes timed{1};
+  for (int k = 0; k < 8; ++k) {
+    const float az = 0.8F * static_cast<float>(k);
+    const float record[5] = {20.0F * std::cos(az), 20.0F * std::sin(az), -0.7F * static_cast<float>(k % 4), 0.5F,
+                             0.0125F * static_cast<float>(k)};
+    for (int f = 0; f < 5; ++f) {
+      std::uint8_t le[4];
+      store_le32(le, std::bit_cast<std::uint32_t>(record[f]));
+      if (f < 4) kitti.insert(kitti.end(), le, le + 4);
+      timed.insert(timed.end(), le, le + 4);
+    }
+  }
+  out.write("fuzz_point_records", "kitti-8.bin", kitti);
+  out.write("fuzz_point_records", "timed-8.bin", timed);
   out.write("fuzz_imu_csv", "comments-crlf.csv",
             std::string("# IMU log\r\n time_s , gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z\r\n\r\n"
                         "1.0,+0.1,-2e-3,0,0.0,0.0,9.81\r\n1.0,0,0,0,0,0,9.8\r\n"));
