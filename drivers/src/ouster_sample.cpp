@@ -13,14 +13,6 @@
 namespace liod::drivers {
 namespace {
 
-std::string read_text(const std::filesystem::path& path, const char* what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path.string(), 0, std::string("cannot open ") + what);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 /// A row-major 4x4 transform with its translation in millimetres, as Ouster's metadata gives them.
 Eigen::Isometry3d transform_mm(const nlohmann::json& doc, const char* key, const std::string& file) {
   const auto it = doc.find(key);
@@ -59,7 +51,7 @@ CloudScanConfig OusterMetadata::cloud_config() const {
 
 OusterMetadata read_ouster_metadata(const std::filesystem::path& path) {
   const std::string file = path.string();
-  const nlohmann::json doc = nlohmann::json::parse(read_text(path, "Ouster metadata"), nullptr, false);
+  const nlohmann::json doc = nlohmann::json::parse(detail::read_text_file(path, "Ouster metadata"), nullptr, false);
   if (doc.is_discarded() || !doc.is_object()) throw InputError(file, 0, "not a JSON object");
   OusterMetadata m;
   const auto altitudes = doc.find("beam_altitude_angles");
@@ -80,7 +72,7 @@ OusterMetadata read_ouster_metadata(const std::filesystem::path& path) {
 
 std::vector<OusterFrame> read_ouster_frame_list(const std::filesystem::path& path) {
   const std::string file = path.string();
-  const std::string text = read_text(path, "Ouster frame list");
+  const std::string text = detail::read_text_file(path, "Ouster frame list");
   constexpr std::string_view kColumns = "index,frame_id,n_points,t_first_col_ns,t_last_col_ns,file";
   detail::LineSplitter lines(text);
   std::string_view line;
@@ -118,7 +110,7 @@ CloudSweep read_ouster_frame(const OusterFrame& frame, std::uint64_t sequence) {
 
 std::vector<ImuSample> read_ouster_imu(const std::filesystem::path& path) {
   const std::string file = path.string();
-  const std::string text = read_text(path, "Ouster IMU log");
+  const std::string text = detail::read_text_file(path, "Ouster IMU log");
   constexpr std::string_view kColumns = "t_accel_ns,t_gyro_ns,ax_mps2,ay_mps2,az_mps2,wx_radps,wy_radps,wz_radps";
   detail::LineSplitter lines(text);
   std::string_view line;
