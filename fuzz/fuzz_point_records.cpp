@@ -40,7 +40,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const auto& p = scan.points[i];
     require(p.ring < scan.beam_count, "ring beyond the beam count");
     require(std::isfinite(p.time) && p.time >= 0.0F, "a point time that is not a time after the start");
-    if (!timed) require(static_cast<double>(p.time) <= config.sweep_period_s, "azimuth time beyond the sweep");
+    if (!timed) require(p.time <= static_cast<float>(config.sweep_period_s), "azimuth time beyond the sweep");
     if (i > 0) require(scan.points[i - 1].time <= p.time, "points not in time order");
   }
   return 0;

@@ -19,6 +19,7 @@ float time_from_azimuth(double azimuth_rad, const CloudScanConfig& config) {
                                       : azimuth_rad - config.start_azimuth_deg * kDegToRad;
   travelled = std::fmod(travelled, turn);
   if (travelled < 0.0) travelled += turn;
+  if (travelled >= turn) travelled = 0.0;  // a tiny negative remainder rounds up to a whole turn
   return static_cast<float>(travelled / turn * config.sweep_period_s);
 }
 
