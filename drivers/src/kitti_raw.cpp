@@ -25,8 +25,12 @@ long long days_from_civil(long long y, unsigned m, unsigned d) {
   return era * 146097 + static_cast<long long>(doe) - 719468;
 }
 
+/// `len` decimal digits at `pos` (no sign: from_chars alone would take "-1" for an hour).
 bool read_int(std::string_view s, std::size_t pos, std::size_t len, int& value) {
   if (pos + len > s.size()) return false;
+  for (std::size_t i = pos; i < pos + len; ++i) {
+    if (s[i] < '0' || s[i] > '9') return false;
+  }
   const char* first = s.data() + pos;
   const auto [ptr, ec] = std::from_chars(first, first + len, value);
   return ec == std::errc() && ptr == first + len;
@@ -66,8 +70,8 @@ double parse_kitti_timestamp(std::string_view text, const std::string& file, std
                   text[13] == ':' && read_int(text, 14, 2, minute) && text[16] == ':' && read_int(text, 17, 2, second) &&
                   month >= 1 && month <= 12 && day >= 1 && day <= 31 && hour < 24 && minute < 60 && second < 61;
   double fraction = 0.0;
-  const bool fraction_ok = text.size() == 19 || (text[19] == '.' && detail::parse_double(text.substr(19), fraction) &&
-                                                 fraction >= 0.0 && fraction < 1.0);
+  const bool fraction_ok = ok && (text.size() == 19 || (text[19] == '.' && detail::parse_double(text.substr(19), fraction) &&
+                                                       fraction >= 0.0 && fraction < 1.0));
   if (!ok || !fraction_ok) {
     throw InputError(file, line, "'" + std::string(text) + "' is not a timestamp YYYY-MM-DD hh:mm:ss.fffffffff");
   }
@@ -138,6 +142,7 @@ ImuSample parse_oxts_line(std::string_view line, double time, const std::string&
   s.time = time;
   s.accel = Eigen::Vector3d(v[kAf], v[kAf + 1], v[kAf + 2]);
   s.gyro = Eigen::Vector3d(v[kWf], v[kWf + 1], v[kWf + 2]);
+  if (!s.accel.allFinite() || !s.gyro.allFinite()) throw InputError(file, 1, "af al au or wf wl wu not finite");
   return s;
 }
 

@@ -23,6 +23,8 @@ TEST(KittiRaw, TimestampsAreSecondsSince1970WithTheirNanoseconds) {
     EXPECT_NE(std::string(e.what()).find("velodyne_points/timestamps.txt:7"), std::string::npos) << e.what();
   }
   EXPECT_THROW((void)parse_kitti_timestamp("2011-13-26 13:02:25.1", "t", 1), InputError);
+  EXPECT_THROW((void)parse_kitti_timestamp("2011-09-26 -1:02:25.1", "t", 1), InputError);
+  EXPECT_THROW((void)parse_kitti_timestamp("", "t", 1), InputError);
 }
 
 TEST(KittiRaw, OxtsLinesGiveTheBodyRatesAndAccelerations) {
@@ -34,6 +36,9 @@ TEST(KittiRaw, OxtsLinesGiveTheBodyRatesAndAccelerations) {
   EXPECT_EQ(s.gyro, Eigen::Vector3d(20.5, 21.5, 22.5));   // wf wl wu
   EXPECT_THROW((void)parse_oxts_line("1 2 3", 0.0, "oxts.txt"), InputError);
   EXPECT_THROW((void)parse_oxts_line(line + "x", 0.0, "oxts.txt"), InputError);
+  std::string not_finite;
+  for (int f = 0; f < 30; ++f) not_finite += f == 21 ? "nan " : "0 ";
+  EXPECT_THROW((void)parse_oxts_line(not_finite, 0.0, "oxts.txt"), InputError);
 }
 
 TEST(KittiRaw, TheCalibrationIsReadFromTheDriveOrItsDateFolder) {
