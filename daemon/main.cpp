@@ -68,11 +68,20 @@ void add_offline_commands(CLI::App& app, Commands& c) {
   c.decode->add_option("--angles", c.decode_options.angles_csv, "calibration CSV (vertical_deg,horizontal_deg) used until a DIFOP arrives");
   c.decode->add_option("--out", c.decode_options.out_dir, "directory for one PCD file per sweep");
 
-  c.replay = app.add_subcommand("replay", "Run a recorded drive (LiDAR pcap + IMU CSV) through the odometry");
+  c.replay = app.add_subcommand("replay", "Run a recorded drive (LiDAR pcap + IMU CSV, or a KITTI raw drive) through the odometry");
   auto& r = c.replay_options;
   c.replay->add_option("--config", c.replay_configs, "configuration file(s), later ones override")->required()->check(CLI::ExistingFile);
-  c.replay->add_option("--pcap", r.pcap, "LiDAR packets (pcap or pcapng)")->required()->check(CLI::ExistingFile);
-  c.replay->add_option("--imu", r.imu_csv, "IMU log (CSV, see README)")->required()->check(CLI::ExistingFile);
+  auto* pcap = c.replay->add_option("--pcap", r.pcap, "LiDAR packets (pcap or pcapng)")->check(CLI::ExistingFile);
+  auto* imu = c.replay->add_option("--imu", r.imu_csv, "IMU log (CSV, see README)")->check(CLI::ExistingFile);
+  auto* kitti = c.replay->add_option("--kitti-raw", r.kitti_raw,
+                                     "a KITTI raw drive's folder (velodyne_points/, oxts/, calib_imu_to_velo.txt here or in its parent) "
+                                     "instead of --pcap and --imu")->check(CLI::ExistingDirectory);
+  kitti->excludes(pcap)->excludes(imu);
+  pcap->needs(imu);
+  imu->needs(pcap);
+  c.replay->callback([pcap, kitti] {
+    if (pcap->count() == 0 && kitti->count() == 0) throw CLI::RequiredError("--pcap and --imu, or --kitti-raw,");
+  });
   c.replay->add_option("--trajectory", r.trajectory_tum, "output: scan-rate poses, TUM format")->required();
   c.replay->add_option("--imu-rate-trajectory", r.imu_rate_tum, "output: IMU-rate poses, TUM format");
   c.replay->add_option("--map-frame-trajectory", r.map_frame_tum,

@@ -11,6 +11,7 @@
 #include <linux/can.h>
 
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -22,6 +23,7 @@
 #include <vector>
 
 #include "liod/daemon/pose_protocol.hpp"
+#include "liod/drivers/byte_order.hpp"
 #include "liod/drivers/can_imu.hpp"
 #include "liod/drivers/mtdata2.hpp"
 #include "liod/drivers/pcap_reader.hpp"
@@ -256,6 +258,29 @@ void text_seeds(SeedWriter& out) {
   out.write("fuzz_imu_csv", "sim-imu.csv", imu);
   out.write("fuzz_angles_csv", "comments-tabs-crlf.csv",
             std::string("# vertical_deg, horizontal_deg\r\n 14.94,\t-4.07\r\n\r\n13.03 , 3.63\r\n-54.6,4.8\n"));
+  // Layout byte, then records: a KITTI-like sweep (x, y, z, reflectance) and a timed one.
+  Bytes kitti{0};
+  Bytes timed{1};
+  for (int k = 0; k < 8; ++k) {
+    const float az = 0.8F * static_cast<float>(k);
+    const float record[5] = {20.0F * std::cos(az), 20.0F * std::sin(az), -0.7F * static_cast<float>(k % 4), 0.5F,
+                             0.0125F * static_cast<float>(k)};
+    for (int f = 0; f < 5; ++f) {
+      std::uint8_t le[4];
+      store_le32(le, std::bit_cast<std::uint32_t>(record[f]));
+      if (f < 4) kitti.insert(kitti.end(), le, le + 4);
+      timed.insert(timed.end(), le, le + 4);
+    }
+  }
+  out.write("fuzz_point_records", "kitti-8.bin", kitti);
+  out.write("fuzz_point_records", "timed-8.bin", timed);
+  out.write("fuzz_kitti_text", "timestamp.txt", std::string("\0" "2011-09-26 13:02:25.964389445\n", 31));
+  out.write("fuzz_kitti_text", "oxts.txt",
+            std::string("\1" "49.015003823272 8.4342971002335 116.43032836914 0.035752 0.00903 -2.6087069803847 "
+                        "-7.2145002546941 -3.4935373500311 8.0158904054762 0.012615712452997 0.18109542932771 "
+                        "-0.21098555664 0.9315014834332 9.7843327712 -0.064806587567 0.93176174283 9.7874117565 "
+                        "0.014236 -0.024386 0.018234 0.014722 -0.0241 0.018329 0.86210643005753 0.22090013123015 "
+                        "4 11 6 6 6\n"));
   out.write("fuzz_imu_csv", "comments-crlf.csv",
             std::string("# IMU log\r\n time_s , gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z\r\n\r\n"
                         "1.0,+0.1,-2e-3,0,0.0,0.0,9.81\r\n1.0,0,0,0,0,0,9.8\r\n"));

@@ -10,16 +10,19 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <ostream>
 #include <stdexcept>
 #include <thread>
 
+#include "liod/daemon/kitti_sources.hpp"
 #include "liod/daemon/pipeline.hpp"
 #include "liod/daemon/sources.hpp"
 #include "liod/daemon/trajectory_writer.hpp"
 
 #include "liod/daemon/percentile.hpp"
+#include "liod/drivers/kitti_raw.hpp"
 
 namespace liod {
 namespace {
@@ -102,16 +105,66 @@ bool close_outputs(TrajectoryWriter& trajectory, TrajectoryWriter* imu_rate, Tra
   return errors.empty();
 }
 
-void print_summary(Pipeline& pipeline, const PcapLidarSource& pcap, double wall_s, std::ostream& out) {
+/// The replay's LiDAR input: packets from a pcap, or a KITTI raw drive's sweeps.
+struct LidarInput {
+  std::unique_ptr<LidarSource> source;
+  std::function<std::uintmax_t()> done;  // progress, against total
+  std::uintmax_t total = 0;
+  std::function<void(std::ostream&)> report;  // the summary's input line
+  std::function<void()> warn;                 // after the run: what the reader could not read
+};
+
+LidarInput pcap_input(Pipeline& pipeline, const ReplayOptions& options, const std::vector<std::uint16_t>& ports,
+                      const std::shared_ptr<PaceClock>& pace) {
+  auto source = std::make_unique<PcapLidarSource>(options.pcap, ports, pace);
+  PcapLidarSource* pcap = source.get();
+  LidarInput in;
+  in.source = std::move(source);
+  in.done = [pcap] { return pcap->bytes_read(); };
+  in.total = std::filesystem::file_size(options.pcap);
+  in.report = [pcap, &pipeline](std::ostream& out) {
+    const auto& ps = pcap->stats();
+    const auto hs = pipeline.lidar_output().decoder_stats();
+    out << "packets: " << hs.msop << " MSOP, " << hs.difop << " DIFOP, " << hs.rejected() << " rejected, "
+        << ps.dropped() << " dropped by the pcap reader\n";
+  };
+  in.warn = [pcap, path = options.pcap] {
+    if (!pcap->read_error().empty()) spdlog::warn("{}: {}", path, pcap->read_error());
+  };
+  return in;
+}
+
+LidarInput kitti_input(const ReplayOptions& options, const std::shared_ptr<PaceClock>& pace) {
+  auto source = std::make_unique<KittiLidarSource>(options.kitti_raw, pace);
+  KittiLidarSource* kitti = source.get();
+  LidarInput in;
+  in.source = std::move(source);
+  in.done = [kitti] { return kitti->sweeps_read(); };
+  in.total = drivers::read_kitti_sweep_list(options.kitti_raw).size();
+  in.report = [kitti](std::ostream& out) {
+    out << "sweeps: " << kitti->sweeps_read() << " of " << kitti->sweeps_total() << " read, "
+        << kitti->returns_dropped() << " returns off every HDL-64E beam or too near\n";
+  };
+  in.warn = [] {};
+  return in;
+}
+
+/// The configuration with the KITTI drive's calib_imu_to_velo.txt as its extrinsics.
+Config with_kitti_extrinsics(const Config& config, const std::string& drive) {
+  Config c = config;
+  const Eigen::Isometry3d velo_to_imu = drivers::read_kitti_imu_to_velo(drive).inverse();
+  c.extrinsics.lidar_to_imu_rotation = Eigen::Quaterniond(velo_to_imu.linear()).normalized();
+  c.extrinsics.lidar_to_imu_translation = velo_to_imu.translation();
+  return c;
+}
+
+void print_summary(Pipeline& pipeline, const LidarInput& input, double wall_s, std::ostream& out) {
   const auto& t = pipeline.totals();
-  const auto& ps = pcap.stats();
-  const auto hs = pipeline.lidar_output().decoder_stats();
   out << "replay: " << t.scans << " scans (" << t.processed << " with a pose, " << t.keyframes << " keyframes, "
       << t.degenerate << " degenerate), " << t.imu_fed << " IMU samples ("
       << t.imu_dropped + pipeline.imu_output().out_of_range() << " dropped, " << pipeline.imu_output().out_of_range()
       << " of them beyond the measurement range; " << pipeline.imu_output().saturated() << " saturated)\n";
-  out << "packets: " << hs.msop << " MSOP, " << hs.difop << " DIFOP, " << hs.rejected() << " rejected, "
-      << ps.dropped() << " dropped by the pcap reader\n";
+  input.report(out);
   out << std::fixed << std::setprecision(2) << "front end per scan (deskew + features + registration): median "
       << percentile(t.front_end_ms, 0.5) << " ms, p99 " << percentile(t.front_end_ms, 0.99) << " ms\n";
   const double drive_s = t.scans > 0 ? static_cast<double>(t.scans) * 0.1 : 0.0;
@@ -121,16 +174,18 @@ void print_summary(Pipeline& pipeline, const PcapLidarSource& pcap, double wall_
 
 }  // namespace
 
-int run_replay(const Config& config, const ReplayOptions& options, std::ostream& out) {
+int run_replay(const Config& given, const ReplayOptions& options, std::ostream& out) {
   const auto wall_start = std::chrono::steady_clock::now();
+  const bool kitti = !options.kitti_raw.empty();
+  const Config config = kitti ? with_kitti_extrinsics(given, options.kitti_raw) : given;
   const std::vector<std::uint16_t> ports{static_cast<std::uint16_t>(config.lidar.msop_port),
                                          static_cast<std::uint16_t>(config.lidar.difop_port)};
   // Both file sources share one pace clock anchored at the earlier of the two first stamps, so
   // a paced replay keeps the recorded interleaving of LiDAR and IMU.
   auto pace = std::make_shared<PaceClock>();
   pace->pace = options.pace;
-  const std::int64_t t_lidar = first_pcap_time_ns(options.pcap, ports);
-  const std::int64_t t_imu = first_imu_time_ns(options.imu_csv);
+  const std::int64_t t_lidar = kitti ? first_kitti_sweep_ns(options.kitti_raw) : first_pcap_time_ns(options.pcap, ports);
+  const std::int64_t t_imu = kitti ? first_kitti_imu_ns(options.kitti_raw) : first_imu_time_ns(options.imu_csv);
   pace->data_start_ns = (t_lidar == 0 || t_imu == 0) ? std::max(t_lidar, t_imu) : std::min(t_lidar, t_imu);
 
   TrajectoryWriter trajectory(options.trajectory_tum);
@@ -168,24 +223,25 @@ int run_replay(const Config& config, const ReplayOptions& options, std::ostream&
     }
     scan_log.write(m.time, ev.diagnostics);
   });
-  auto pcap_source = std::make_unique<PcapLidarSource>(options.pcap, ports, pace);
-  PcapLidarSource* pcap = pcap_source.get();
+  LidarInput input = kitti ? kitti_input(options, pace) : pcap_input(pipeline, options, ports, pace);
+  std::unique_ptr<ImuSource> imu_source;
+  if (kitti) imu_source = std::make_unique<KittiImuSource>(options.kitti_raw, pace);
+  else imu_source = std::make_unique<CsvImuSource>(options.imu_csv, pace);
   pace->host_start_steady_ns = steady_ns();
-  pipeline.start(std::move(pcap_source), std::make_unique<CsvImuSource>(options.imu_csv, pace));
+  pipeline.start(std::move(input.source), std::move(imu_source));
 
-  const auto total_bytes = std::filesystem::file_size(options.pcap);
-  ProgressBar progress(options.progress, total_bytes);
+  ProgressBar progress(options.progress, input.total);
   while (!pipeline.finished() && pipeline.error().empty()) {
-    progress.update(pcap->bytes_read(), pipeline.lidar_output().sweeps());
+    progress.update(input.done(), pipeline.lidar_output().sweeps());
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   pipeline.join();
-  progress.update(total_bytes, pipeline.lidar_output().sweeps());
+  progress.update(input.total, pipeline.lidar_output().sweeps());
   progress.finish();
   if (!pipeline.error().empty()) throw std::runtime_error(pipeline.error());
 
-  if (!pcap->read_error().empty()) spdlog::warn("{}: {}", options.pcap, pcap->read_error());
-  print_summary(pipeline, *pcap, std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count(), out);
+  input.warn();
+  print_summary(pipeline, input, std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count(), out);
   if (BackendWorker* backend = pipeline.backend()) {
     for (const auto& s : backend->backend().corrected_trajectory(scan_poses)) trajectory.write(s);
     out << backend->summary();

@@ -154,6 +154,13 @@ void LidarOutput::on_sweep(Scan& scan, const drivers::SweepInfo& info) {
   swap(item_.scan, scan);
 }
 
+void LidarOutput::sweep(Scan& scan) {
+  packet_steady_ = steady_ns();
+  packet_queued_ = 0;
+  heartbeat_.store(packet_steady_, std::memory_order_relaxed);
+  on_sweep(scan, drivers::SweepInfo{});
+}
+
 void LidarOutput::finish() {
   decoder_->flush();
   {

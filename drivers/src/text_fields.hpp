@@ -5,10 +5,24 @@
 #include <charconv>
 #include <cmath>
 #include <cstddef>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <string_view>
 
+#include "liod/drivers/input_error.hpp"
+
 namespace liod::drivers::detail {
+
+/// A whole text file; InputError naming it and `what` it is when it cannot be opened.
+[[nodiscard]] inline std::string read_text_file(const std::filesystem::path& path, const char* what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string(), 0, std::string("cannot open ") + what);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
 
 [[nodiscard]] inline std::string_view trim(std::string_view s) noexcept {
   const auto is_space = [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f'; };

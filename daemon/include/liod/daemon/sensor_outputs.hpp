@@ -56,6 +56,9 @@ class LidarOutput {
   /// `queued_ns`: how long it waited in the socket before this thread took it (live, else 0).
   void packet(std::span<const std::uint8_t> payload, std::int64_t arrival_realtime_ns, std::uint16_t dst_port,
               std::int64_t queued_ns = 0);
+  /// A finished sweep from the point-cloud path (no packets, no decoder): on the pipeline's clock
+  /// already, handed on as a decoded Helios sweep is. The scan is left with a recycled buffer.
+  void sweep(Scan& scan);
   /// End of stream: flush the decoder and close the ring.
   void finish();
   void heartbeat() noexcept { heartbeat_.store(steady_ns(), std::memory_order_relaxed); }
