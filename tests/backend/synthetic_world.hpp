@@ -7,6 +7,7 @@
 #include <random>
 #include <vector>
 
+#include "liod/backend/keyframe_store.hpp"
 #include "liod/backend/loop_closure.hpp"
 #include "liod/lidar_inertial_odometry.hpp"
 #include "liod/voxel_grid.hpp"
@@ -79,6 +80,30 @@ inline Keyframe make_keyframe(const World& world, const Eigen::Isometry3d& truth
   k.similarity_cloud_world.insert(k.similarity_cloud_world.end(), k.edges_world.begin(), k.edges_world.end());
   k.similarity_cloud_world = voxel_downsample(k.similarity_cloud_world, 1.0);
   return k;
+}
+
+/// What Backend::add_keyframe stores of a keyframe: its points in its body frame, voxel-thinned.
+inline BackendKeyframe to_backend(const Keyframe& k, double voxel) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = k.state.rotation;
+  pose.translation() = k.state.position;
+  const Eigen::Isometry3d inv = pose.inverse();
+  auto body = [&](const std::vector<Eigen::Vector3d>& w, double v) {
+    std::vector<Eigen::Vector3d> b;
+    for (const auto& p : w) b.push_back(inv * p);
+    if (v > 0) b = voxel_downsample(b, v);
+    std::vector<Eigen::Vector3f> out;
+    for (const auto& p : b) out.push_back(p.cast<float>());
+    return out;
+  };
+  BackendKeyframe out;
+  out.id = k.id;
+  out.time = k.state.time;
+  out.odometry_pose = pose;
+  out.planes = body(k.planes_world, voxel);
+  out.edges = body(k.edges_world, voxel);
+  out.similarity = body(k.similarity_cloud_world, 0.0);
+  return out;
 }
 
 inline Eigen::Isometry3d pose_xyz_yaw(double x, double y, double z, double yaw) {

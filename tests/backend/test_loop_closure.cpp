@@ -20,30 +20,6 @@ AlgorithmConfig test_config() {
   return c;
 }
 
-BackendKeyframe to_backend(const Keyframe& k, double voxel) {
-  // What Backend::add_keyframe stores: body-frame points.
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = k.state.rotation;
-  pose.translation() = k.state.position;
-  const Eigen::Isometry3d inv = pose.inverse();
-  auto body = [&](const std::vector<Eigen::Vector3d>& w, double v) {
-    std::vector<Eigen::Vector3d> b;
-    for (const auto& p : w) b.push_back(inv * p);
-    if (v > 0) b = voxel_downsample(b, v);
-    std::vector<Eigen::Vector3f> out;
-    for (const auto& p : b) out.push_back(p.cast<float>());
-    return out;
-  };
-  BackendKeyframe out;
-  out.id = k.id;
-  out.time = k.state.time;
-  out.odometry_pose = pose;
-  out.planes = body(k.planes_world, voxel);
-  out.edges = body(k.edges_world, voxel);
-  out.similarity = body(k.similarity_cloud_world, 0.0);
-  return out;
-}
-
 // Street A along x at y = 0: facades at y = -7 (south) and a 4 m high median wall at y = +4.5.
 // Street B, parallel at y = 9: the same wall to its south and other facades at y = 16. The
 // synthetic scans have no occlusion, so each street's scans see only its own world (the wall
@@ -73,7 +49,7 @@ Scene street_a_submap(const World& w) {
   Scene s;
   for (int i = 0; i <= 10; ++i) {
     const auto pose = liod::test::pose_xyz_yaw(-10.0 + 2.0 * i, 0.0, 0.0, 0.0);
-    s.keyframes.push_back(to_backend(liod::test::make_keyframe(w, pose, pose, static_cast<std::uint64_t>(i), i * 0.2), 0.3));
+    s.keyframes.push_back(liod::test::to_backend(liod::test::make_keyframe(w, pose, pose, static_cast<std::uint64_t>(i), i * 0.2), 0.3));
     s.poses.push_back(pose);
   }
   return s;
@@ -81,7 +57,7 @@ Scene street_a_submap(const World& w) {
 
 // Appends the current keyframe: truly at `truth`, believed (graph) at `graph`, 100 s later.
 std::size_t add_current(Scene& s, const World& w, const Eigen::Isometry3d& truth, const Eigen::Isometry3d& graph) {
-  s.keyframes.push_back(to_backend(liod::test::make_keyframe(w, truth, graph, 100, 100.0), 0.3));
+  s.keyframes.push_back(liod::test::to_backend(liod::test::make_keyframe(w, truth, graph, 100, 100.0), 0.3));
   s.poses.push_back(graph);
   return s.keyframes.size() - 1;
 }
@@ -178,7 +154,7 @@ TEST(LoopCheck, VerticalCheckRejectsASlopedLookAlike) {
   for (int i = 0; i <= 10; ++i) {
     // Candidate keyframes driven up the ramp: their poses pitch with it (the graph knows that).
     const Eigen::Isometry3d pose = slope * liod::test::pose_xyz_yaw(-10.0 + 2.0 * i, 0.0, 0.0, 0.0);
-    s.keyframes.push_back(to_backend(liod::test::make_keyframe(ramp, pose, pose, static_cast<std::uint64_t>(i), i * 0.2), 0.3));
+    s.keyframes.push_back(liod::test::to_backend(liod::test::make_keyframe(ramp, pose, pose, static_cast<std::uint64_t>(i), i * 0.2), 0.3));
     s.poses.push_back(pose);
   }
   // Now on the level deck, right beside the ramp's position in x-y.
@@ -216,7 +192,7 @@ TEST(LoopCheck, OtherLevelOfADeckDoesNotClose) {
   Scene s;
   for (int i = 0; i <= 10; ++i) {
     const auto pose = liod::test::pose_xyz_yaw(-10.0 + 2.0 * i, 0.0, 0.0, 0.0);
-    s.keyframes.push_back(to_backend(liod::test::make_keyframe(lower, pose, pose, static_cast<std::uint64_t>(i), i * 0.2), 0.3));
+    s.keyframes.push_back(liod::test::to_backend(liod::test::make_keyframe(lower, pose, pose, static_cast<std::uint64_t>(i), i * 0.2), 0.3));
     s.poses.push_back(pose);
   }
   const auto truth = liod::test::pose_xyz_yaw(0.0, 0.0, 3.0, 0.0);

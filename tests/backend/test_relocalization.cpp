@@ -47,24 +47,7 @@ World town(unsigned seed) {
 // What the backend keeps of a keyframe seen at `truth`: body-frame points at its resolution.
 BackendKeyframe backend_keyframe(const World& w, const Eigen::Isometry3d& truth, const Eigen::Isometry3d& odometry,
                                  std::uint64_t id, double time) {
-  const Keyframe k = test::make_keyframe(w, truth, odometry, id, time);
-  BackendKeyframe b;
-  b.id = id;
-  b.time = time;
-  b.odometry_pose = odometry;
-  const Eigen::Isometry3d body_from_odom = odometry.inverse();
-  auto body = [&](const std::vector<Eigen::Vector3d>& in, double voxel) {
-    std::vector<Eigen::Vector3d> d;
-    for (const auto& p : in) d.push_back(body_from_odom * p);
-    if (voxel > 0.0) d = voxel_downsample(d, voxel);
-    std::vector<Eigen::Vector3f> out;
-    for (const auto& p : d) out.push_back(p.cast<float>());
-    return out;
-  };
-  b.planes = body(k.planes_world, 0.3);
-  b.edges = body(k.edges_world, 0.3);
-  b.similarity = body(k.similarity_cloud_world, 0.0);
-  return b;
+  return test::to_backend(test::make_keyframe(w, truth, odometry, id, time), 0.3);
 }
 
 class MemorySpill final : public KeyframeSpill {
