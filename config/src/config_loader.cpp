@@ -117,6 +117,7 @@ void declare_backend(Schema& s, BackendConfig& b) {
   s.real("backend.loop_translation_sigma_m", &b.loop_translation_sigma_m, 1e-4, 100.0);
   s.real("backend.loop_rotation_sigma_deg", &b.loop_rotation_sigma_deg, 1e-4, 90.0);
   s.real("backend.tilt_sigma_deg", &b.tilt_sigma_deg, 0.0, 90.0);
+  s.boolean("backend.imu_factors", &b.imu_factors);
   s.integer("backend.max_solver_iterations", &b.max_solver_iterations, 1, 10000);
   s.integer("backend.solve_window_keyframes", &b.solve_window_keyframes, 0, 100000000);
   s.real("backend.keyframe_voxel_m", &b.keyframe_voxel_m, 0.01, 10.0);

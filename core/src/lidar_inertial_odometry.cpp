@@ -28,6 +28,10 @@ constexpr double kImuBeforeState_s = 0.5;
 // Against the first keyframes' map, with a rolling start's speed still settling, the first
 // candidate holds the speed better (docs/design.md, "The flattest plane query per voxel").
 constexpr std::size_t kFlattestQueriesFromKeyframe = 3;
+// The backend's IMU factor spans the stretch between two keyframes. Over a longer one (a long
+// standstill) the preintegration is dead reckoning whose covariance leaves the graph little to
+// learn, and its samples would pile up: the keyframe then carries none.
+constexpr double kKeyframeImuSpan_s = 10.0;
 
 double velocity_std(const StateCovariance& p) { return std::sqrt(p.block<3, 3>(6, 6).diagonal().maxCoeff()); }
 
@@ -39,6 +43,7 @@ LidarInertialOdometry::LidarInertialOdometry(const FrontEndConfig& config, const
     : config_(config),
       extrinsics_(config.extrinsics),
       lidar_to_imu_{config.extrinsics.lidar_to_imu_rotation, config.extrinsics.lidar_to_imu_translation},
+      noise_(imu_noise(config.imu)),
       update_params_(update_params(config)),
       extractor_(feature_params(config)),
       imu_(kImuHistory_s, config.imu.gyro_range_rad_s, config.imu.accel_range_m_s2),
@@ -47,10 +52,6 @@ LidarInertialOdometry::LidarInertialOdometry(const FrontEndConfig& config, const
       move_off_(move_off_config(config.odometry)),
       window_(keyframe_window_config(config.odometry, update_params_)),
       reinit_(reinitialization_config(config.odometry, limits)) {
-  noise_.gyro_noise_density = config.imu.gyro_noise_density;
-  noise_.accel_noise_density = config.imu.accel_noise_density;
-  noise_.gyro_bias_random_walk = config.imu.gyro_bias_random_walk;
-  noise_.accel_bias_random_walk = config.imu.accel_bias_random_walk;
   deskew_params_.map_min_point_spacing_m = config.odometry.map_min_point_spacing_m;
   deskew_params_.plane_voxel_m = config.odometry.plane_voxel_m;
   deskew_params_.edge_voxel_m = config.odometry.edge_voxel_m;
@@ -171,6 +172,7 @@ void LidarInertialOdometry::process_scan(const Scan& scan, const ScanFeatures* e
 
   // 4. Map: the beams' calibration, the keyframe gate and the window (keyframe_window.hpp).
   t = Clock::now();
+  keep_keyframe_imu(prediction, result.status);
   update_map(features, result);
   result.map_ms = elapsed_ms(t);
 
@@ -318,8 +320,24 @@ void LidarInertialOdometry::update_map(const DeskewedFeatures& features, Odometr
   // either; as a keyframe it would only push good keyframes out of the window.
   if (!(result.status & kStatusFewFeatures) && window_.consider(features, state_, result.hausdorff_m)) {
     result.status |= kStatusKeyframe;
+    window_.set_newest_imu(imu_since_keyframe_measured_ ? std::move(imu_since_keyframe_) : std::vector<ImuInterval>{});
+    imu_since_keyframe_.clear();
+    imu_since_keyframe_measured_ = true;
   }
   move_off_.update(state_.position, window_.keyframes().size());
+}
+
+// What the prediction integrated, appended to the stretch since the last keyframe. Bridged
+// intervals (an IMU gap, an IMU the LiDAR contradicted) are the last twist held, not measurements:
+// such a stretch gives the backend no IMU factor.
+void LidarInertialOdometry::keep_keyframe_imu(const Prediction& prediction, std::uint32_t status) {
+  if (status & (kStatusImuGap | kStatusImuInconsistent)) imu_since_keyframe_measured_ = false;
+  if (!imu_since_keyframe_measured_) return;
+  imu_since_keyframe_.insert(imu_since_keyframe_.end(), prediction.intervals.begin(), prediction.intervals.end());
+  if (!imu_since_keyframe_.empty() && prediction.predicted.time - imu_since_keyframe_.front().start_time > kKeyframeImuSpan_s) {
+    imu_since_keyframe_.clear();
+    imu_since_keyframe_measured_ = false;
+  }
 }
 
 void LidarInertialOdometry::restart_map_if_lost(Prediction& prediction) {
@@ -340,6 +358,8 @@ void LidarInertialOdometry::check_recovery(OdometryResult& result) {
     initialized_ = false;
     start_up_.abandon();
     window_.restart();
+    imu_since_keyframe_.clear();
+    imu_since_keyframe_measured_ = false;
     map_trusted_ = false;
     holds_ = BiasHolds(bias_hold_config(config_.odometry));
     move_off_ = MoveOff(move_off_config(config_.odometry));

@@ -2,6 +2,15 @@
 
 namespace liod {
 
+ImuNoise imu_noise(const ImuConfig& imu) {
+  ImuNoise noise;
+  noise.gyro_noise_density = imu.gyro_noise_density;
+  noise.accel_noise_density = imu.accel_noise_density;
+  noise.gyro_bias_random_walk = imu.gyro_bias_random_walk;
+  noise.accel_bias_random_walk = imu.accel_bias_random_walk;
+  return noise;
+}
+
 FeatureParams feature_params(const FrontEndConfig& config) {
   const OdometryConfig& o = config.odometry;
   const ExtrinsicsConfig& extrinsics = config.extrinsics;

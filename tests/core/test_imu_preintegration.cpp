@@ -5,39 +5,17 @@
 #include "liod/imu_preintegration.hpp"
 #include "liod/imu_trajectory.hpp"
 #include "liod/so3.hpp"
+#include "analytic_motion.hpp"
 
 namespace {
 
-const Eigen::Vector3d kGravity(0.0, 0.0, -9.80665);
-const Eigen::Vector3d kOmega(0.05, -0.1, 0.3);  // constant body rate, rad/s
-
-// A smooth analytic trajectory: R(t) = Exp(w t), p(t) with closed-form acceleration.
-Eigen::Matrix3d rotation_at(double t) { return liod::so3::exp(kOmega * t); }
-Eigen::Vector3d position_at(double t) { return {10.0 * std::sin(0.5 * t), 4.0 * std::cos(0.3 * t), 0.2 * t * t}; }
-Eigen::Vector3d velocity_at(double t) { return {5.0 * std::cos(0.5 * t), -1.2 * std::sin(0.3 * t), 0.4 * t}; }
-Eigen::Vector3d acceleration_at(double t) { return {-2.5 * std::sin(0.5 * t), -0.36 * std::cos(0.3 * t), 0.4}; }
+const Eigen::Vector3d& kGravity = liod::test::kAnalyticGravity;
 
 std::deque<liod::ImuSample> simulate(double duration, double rate, const Eigen::Vector3d& bg, const Eigen::Vector3d& ba) {
-  std::deque<liod::ImuSample> out;
-  for (int k = 0; k <= static_cast<int>(duration * rate); ++k) {
-    const double t = k / rate;
-    liod::ImuSample s;
-    s.time = t;
-    s.gyro = kOmega + bg;
-    s.accel = rotation_at(t).transpose() * (acceleration_at(t) - kGravity) + ba;
-    out.push_back(s);
-  }
-  return out;
+  return liod::test::analytic_imu(duration, rate, bg, ba);
 }
 
-liod::NavState truth(double t) {
-  liod::NavState s;
-  s.time = t;
-  s.rotation = rotation_at(t);
-  s.position = position_at(t);
-  s.velocity = velocity_at(t);
-  return s;
-}
+liod::NavState truth(double t) { return liod::test::analytic_state(t); }
 
 TEST(ImuPreintegration, PredictsAnAnalyticTrajectory) {
   const auto samples = simulate(2.0, 200.0, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());

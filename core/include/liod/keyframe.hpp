@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "liod/imu_preintegration.hpp"  // NavState
+#include "liod/imu_trajectory.hpp"     // ImuInterval
 
 namespace liod {
 
@@ -16,6 +17,10 @@ struct Keyframe {
   std::vector<Eigen::Vector3d> edges_world;
   std::vector<Eigen::Vector3d> post_axes_world;  // edges_world placed on their posts' axes (post_axes), with posts on
   std::vector<Eigen::Vector3d> similarity_cloud_world;  // downsampled, for the Hausdorff test; the newest keyframe's only
+  /// The IMU's measurements from the previous keyframe's time to this one's, as the prediction
+  /// used them: the backend's preintegration factor between the two (LIO-SAM's graph). Empty when
+  /// they do not measure that stretch (an IMU gap or a contradicted IMU in it, the first keyframe).
+  std::vector<ImuInterval> imu_since_previous;
 };
 
 }  // namespace liod

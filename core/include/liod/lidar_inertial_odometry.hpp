@@ -129,6 +129,7 @@ class LidarInertialOdometry {
                                 Prediction& prediction, DeskewedFeatures& features, UpdateResult& updated);
   UpdateResult update(const Prediction& prediction, const DeskewedFeatures& features, const UpdateParams& params) const;
   void update_map(const DeskewedFeatures& features, OdometryResult& result);
+  void keep_keyframe_imu(const Prediction& prediction, std::uint32_t status);
   /// Before registering a scan: a new map if the prediction left the map's registration basin.
   void restart_map_if_lost(Prediction& prediction);
   /// After a scan: the recovery's flag, the published covariance, and the start-up again from an
@@ -156,6 +157,8 @@ class LidarInertialOdometry {
   NavState state_;
   StateCovariance covariance_ = StateCovariance::Zero();
   Eigen::Vector3d last_angular_rate_ = Eigen::Vector3d::Zero();  // body frame, for constant-velocity deskew and gaps
+  std::vector<ImuInterval> imu_since_keyframe_;  // for the next keyframe (Keyframe::imu_since_previous)
+  bool imu_since_keyframe_measured_ = true;      // no bridged interval among them
 };
 
 }  // namespace liod

@@ -5,6 +5,7 @@
 #include "liod/algorithm_config.hpp"
 #include "liod/bias_holds.hpp"
 #include "liod/curvature_features.hpp"
+#include "liod/imu_preintegration.hpp"
 #include "liod/iterated_update.hpp"
 #include "liod/keyframe_window.hpp"
 #include "liod/move_off.hpp"
@@ -13,6 +14,7 @@
 
 namespace liod {
 
+ImuNoise imu_noise(const ImuConfig& imu);
 FeatureParams feature_params(const FrontEndConfig& config);
 StartUpConfig start_up_config(const FrontEndConfig& config);
 BiasHoldConfig bias_hold_config(const OdometryConfig& odometry);

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "liod/angles.hpp"
+#include "liod/unit_configs.hpp"
 #include "liod/voxel_grid.hpp"
 
 namespace liod {
@@ -40,6 +41,27 @@ Eigen::Isometry3d interpolate(const Eigen::Isometry3d& a, const Eigen::Isometry3
   return out;
 }
 
+// The graph's world frame differs from the odometry's by the correction at the node: its velocity
+// and gravity turn with it.
+NodeMotion motion_in_graph(const NavState& odometry, const Eigen::Isometry3d& graph_pose) {
+  const Eigen::Matrix3d turn = graph_pose.linear() * odometry.rotation.transpose();
+  return {turn * odometry.velocity, odometry.gyro_bias, odometry.accel_bias};
+}
+
+// Whether the intervals measure exactly [from, to]: the front end's stretch since the previous
+// keyframe, unbroken (keyframe.hpp). A keyframe that came after a reset of the front end, or a
+// backend that missed one, has intervals from another start.
+bool covers(const std::vector<ImuInterval>& intervals, double from, double to) {
+  constexpr double kTolerance_s = 1e-6;
+  if (intervals.empty() || std::abs(intervals.front().start_time - from) > kTolerance_s) return false;
+  double t = from;
+  for (const auto& iv : intervals) {
+    if (std::abs(iv.start_time - t) > kTolerance_s || !(iv.dt >= 0.0)) return false;
+    t = iv.start_time + iv.dt;
+  }
+  return std::abs(t - to) <= kTolerance_s;
+}
+
 }  // namespace
 
 Backend::Backend(const AlgorithmConfig& config, std::shared_ptr<KeyframeSpill> spill, std::uint64_t first_keyframe_id)
@@ -74,6 +96,8 @@ bool Backend::add_keyframe(const Keyframe& keyframe) {
     graph_.add_factor(f);
   }
   const Eigen::Vector3d up = map_up_in_body(k.odometry_pose);
+  graph_.set_motion(node, motion_in_graph(keyframe.state, graph_.pose(node)));
+  if (b.imu_factors && node > 0) add_imu_factor(node - 1, keyframe);
   keyframes_.add(std::move(k));
   if (b.tilt_sigma_deg > 0.0) graph_.set_tilt(node, up, b.tilt_sigma_deg * kDegToRad);
   ++stats_.keyframes;
@@ -92,6 +116,24 @@ bool Backend::add_keyframe(const Keyframe& keyframe) {
   const bool closed = search_loop(node);
   correction_version_ += closed ? 1 : 0;
   return closed;
+}
+
+// The IMU between the previous keyframe and this one, preintegrated at the previous node's biases.
+void Backend::add_imu_factor(std::size_t previous, const Keyframe& keyframe) {
+  const std::vector<ImuInterval>& intervals = keyframe.imu_since_previous;
+  if (!covers(intervals, keyframes_.time(previous), keyframe.state.time)) return;
+  const NodeMotion& start = graph_.motion(previous);
+  auto preintegration = std::make_shared<ImuPreintegration>(start.gyro_bias, start.accel_bias, imu_noise(config_.imu));
+  for (const auto& iv : intervals) preintegration->integrate(iv.gyro, iv.accel, iv.dt);
+  const double dt = preintegration->duration();
+  ImuGraphFactor f;
+  f.from = previous;
+  f.to = previous + 1;
+  f.gravity = graph_.pose(f.to).linear() * keyframe.state.rotation.transpose() * keyframe.state.gravity;
+  f.gyro_bias_walk_sigma = config_.imu.gyro_bias_random_walk * std::sqrt(dt);
+  f.accel_bias_walk_sigma = config_.imu.accel_bias_random_walk * std::sqrt(dt);
+  f.preintegration = std::move(preintegration);
+  graph_.add_imu_factor(std::move(f));
 }
 
 void Backend::use_saved_map(std::unique_ptr<Relocalizer> relocalizer) {
@@ -131,8 +173,8 @@ void Backend::match_map(std::size_t node) {
 void Backend::move_graph(const Eigen::Isometry3d& delta) {
   map_from_run_rotation_ = delta.linear() * map_from_run_rotation_;
   const double sigma = config_.backend.tilt_sigma_deg * kDegToRad;
+  graph_.transform(delta);
   for (std::size_t k = 0; k < graph_.size(); ++k) {
-    graph_.set_pose(k, delta * graph_.pose(k));
     if (sigma > 0.0) graph_.set_tilt(k, map_up_in_body(keyframes_.odometry_pose(k)), sigma);
   }
   ++correction_version_;

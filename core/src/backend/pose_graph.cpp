@@ -8,6 +8,8 @@
 #include <chrono>
 #include <cmath>
 
+#include "imu_factor.hpp"
+
 namespace liod {
 namespace {
 
@@ -81,6 +83,7 @@ Matrix6d relative_pose_information(double translation_sigma_m, double rotation_s
 
 std::size_t PoseGraph::add_node(const Eigen::Isometry3d& initial) {
   poses_.push_back(initial);
+  motions_.emplace_back();
   tilt_up_.emplace_back(Eigen::Vector3d::Zero());
   tilt_sigma_.push_back(0.0);
   return poses_.size() - 1;
@@ -102,6 +105,23 @@ double PoseGraph::whitened_error(const PoseGraphFactor& f) const {
   Eigen::Matrix<double, 6, 1> r;
   error(qa.coeffs().data(), pa.data(), qb.coeffs().data(), pb.data(), r.data());
   return r.norm();
+}
+
+Eigen::Matrix<double, 9, 1> PoseGraph::whitened_error(const ImuGraphFactor& f) const {
+  const ImuError error(f);
+  const Eigen::Quaterniond qa(poses_[f.from].linear());
+  const Eigen::Quaterniond qb(poses_[f.to].linear());
+  const Eigen::Vector3d pa = poses_[f.from].translation();
+  const Eigen::Vector3d pb = poses_[f.to].translation();
+  const NodeMotion& ma = motions_[f.from];
+  const NodeMotion& mb = motions_[f.to];
+  Eigen::Matrix<double, 6, 1> ba, bb;
+  ba << ma.gyro_bias, ma.accel_bias;
+  bb << mb.gyro_bias, mb.accel_bias;
+  Eigen::Matrix<double, 15, 1> r;
+  error(qa.coeffs().data(), pa.data(), ma.velocity.data(), ba.data(), qb.coeffs().data(), pb.data(), mb.velocity.data(),
+        bb.data(), r.data());
+  return r.head<9>();
 }
 
 SolveReport PoseGraph::optimize(RobustLoss loss, double scale, int max_iterations, std::size_t first_free) {
@@ -147,79 +167,162 @@ ceres::Solver::Summary run_solver(ceres::Problem& problem, int max_iterations) {
 
 }  // namespace
 
+namespace {
+
+// One solve's Ceres problem over copies of the graph's states: a node enters it once, free nodes
+// with their manifold and tilt factor, held ones (node 0, the prior that fixes the gauge, and in a
+// windowed solve the nodes before the window, where the factors into the window anchor it) as
+// constants. Velocity and biases enter with the first IMU factor that reaches the node.
+class GraphProblem {
+ public:
+  GraphProblem(const std::vector<Eigen::Isometry3d>& poses, const std::vector<NodeMotion>& motions,
+               const std::vector<Eigen::Vector3d>& tilt_up, const std::vector<double>& tilt_sigma, std::size_t first_free)
+      : q_(poses.size()), p_(poses.size()), v_(poses.size()), b_(poses.size()), added_(poses.size(), 0),
+        motion_added_(poses.size(), 0), tilt_up_(tilt_up), tilt_sigma_(tilt_sigma), first_free_(first_free),
+        problem_(problem_options()) {
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+      q_[i] = Eigen::Quaterniond(poses[i].linear()).normalized();
+      p_[i] = poses[i].translation();
+      v_[i] = motions[i].velocity;
+      b_[i] << motions[i].gyro_bias, motions[i].accel_bias;
+    }
+  }
+
+  void add_node(std::size_t i) {
+    if (added_[i]) return;
+    added_[i] = 1;
+    problem_.AddParameterBlock(q_[i].coeffs().data(), 4);
+    problem_.AddParameterBlock(p_[i].data(), 3);
+    if (i < first_free_) {
+      problem_.SetParameterBlockConstant(q_[i].coeffs().data());
+      problem_.SetParameterBlockConstant(p_[i].data());
+      return;
+    }
+#if LIOD_CERES_HAS_MANIFOLD
+    problem_.SetManifold(q_[i].coeffs().data(), &quaternion_manifold_);
+#else
+    problem_.SetParameterization(q_[i].coeffs().data(), &quaternion_manifold_);
+#endif
+    if (tilt_sigma_[i] > 0.0) {
+      problem_.AddResidualBlock(new ceres::AutoDiffCostFunction<TiltError, 3, 4>(new TiltError(tilt_up_[i], tilt_sigma_[i])),
+                                nullptr, q_[i].coeffs().data());
+    }
+  }
+
+  void add_factor(const PoseGraphFactor& f, ceres::LossFunction* robust) {
+    add_node(f.from);
+    add_node(f.to);
+    auto* cost = new ceres::AutoDiffCostFunction<RelativePoseError, 6, 4, 3, 4, 3>(
+        new RelativePoseError(f.measured, sqrt_information(f.information)));
+    problem_.AddResidualBlock(cost, robust, q_[f.from].coeffs().data(), p_[f.from].data(), q_[f.to].coeffs().data(),
+                              p_[f.to].data());
+  }
+
+  void add_imu_factor(const ImuGraphFactor& f) {
+    add_node(f.from);
+    add_node(f.to);
+    add_motion(f.from);
+    add_motion(f.to);
+    auto* cost = new ceres::AutoDiffCostFunction<ImuError, 15, 4, 3, 3, 6, 4, 3, 3, 6>(new ImuError(f));
+    problem_.AddResidualBlock(cost, nullptr, q_[f.from].coeffs().data(), p_[f.from].data(), v_[f.from].data(),
+                              b_[f.from].data(), q_[f.to].coeffs().data(), p_[f.to].data(), v_[f.to].data(),
+                              b_[f.to].data());
+  }
+
+  ceres::Problem& problem() { return problem_; }
+
+  /// The free nodes' solution into the graph's states.
+  void read_back(std::vector<Eigen::Isometry3d>& poses, std::vector<NodeMotion>& motions) const {
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+      if (i >= first_free_) {
+        poses[i].linear() = q_[i].normalized().toRotationMatrix();
+        poses[i].translation() = p_[i];
+      }
+      if (!motion_added_[i]) continue;
+      motions[i].velocity = v_[i];
+      motions[i].gyro_bias = b_[i].head<3>();
+      motions[i].accel_bias = b_[i].tail<3>();
+    }
+  }
+
+ private:
+  static ceres::Problem::Options problem_options() {
+    ceres::Problem::Options options;
+#if LIOD_CERES_HAS_MANIFOLD
+    options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+#else
+    options.local_parameterization_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+#endif
+    return options;
+  }
+
+  void add_motion(std::size_t i) {
+    if (motion_added_[i]) return;
+    motion_added_[i] = 1;
+    problem_.AddParameterBlock(v_[i].data(), 3);
+    problem_.AddParameterBlock(b_[i].data(), 6);
+    // Node 0's pose is the gauge, not its velocity and biases: those the IMU factors estimate. A
+    // windowed solve holds what lies before the window as it is.
+    if (i < first_free_ && first_free_ > 1) {
+      problem_.SetParameterBlockConstant(v_[i].data());
+      problem_.SetParameterBlockConstant(b_[i].data());
+    }
+  }
+
+  std::vector<Eigen::Quaterniond> q_;  // Eigen's layout (x, y, z, w)
+  std::vector<Eigen::Vector3d> p_;
+  std::vector<Eigen::Vector3d> v_;
+  std::vector<Eigen::Matrix<double, 6, 1>> b_;  // (b_g, b_a)
+  std::vector<char> added_;
+  std::vector<char> motion_added_;
+  const std::vector<Eigen::Vector3d>& tilt_up_;
+  const std::vector<double>& tilt_sigma_;
+  std::size_t first_free_;
+#if LIOD_CERES_HAS_MANIFOLD
+  ceres::EigenQuaternionManifold quaternion_manifold_;
+#else
+  ceres::EigenQuaternionParameterization quaternion_manifold_;
+#endif
+  ceres::Problem problem_;
+};
+
+}  // namespace
+
 SolveReport PoseGraph::solve(RobustLoss loss, double scale, int max_iterations, std::size_t first_free) {
   SolveReport report;
   first_free = std::max<std::size_t>(first_free, 1);  // node 0 is the prior: always held
   if (poses_.size() <= first_free) return report;
   report.nodes = poses_.size() - first_free;
 
-  // Parameter blocks: Eigen's quaternion layout (x, y, z, w) and the translation, per node.
-  std::vector<Eigen::Quaterniond> q(poses_.size());
-  std::vector<Eigen::Vector3d> p(poses_.size());
-  for (std::size_t i = 0; i < poses_.size(); ++i) {
-    q[i] = Eigen::Quaterniond(poses_[i].linear()).normalized();
-    p[i] = poses_[i].translation();
-  }
-
-  ceres::Problem::Options problem_options;
-#if LIOD_CERES_HAS_MANIFOLD
-  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::EigenQuaternionManifold quaternion_manifold;
-#else
-  problem_options.local_parameterization_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::EigenQuaternionParameterization quaternion_manifold;
-#endif
-  ceres::Problem problem(problem_options);
-  // A node enters the problem once: free nodes with their manifold and tilt factor, held ones
-  // (node 0, the prior that fixes the gauge, and in a windowed solve the nodes before the
-  // window, where the factors into the window anchor it) as constants.
-  std::vector<char> added(poses_.size(), 0);
-  auto add_node_blocks = [&](std::size_t i) {
-    if (added[i]) return;
-    added[i] = 1;
-    problem.AddParameterBlock(q[i].coeffs().data(), 4);
-    problem.AddParameterBlock(p[i].data(), 3);
-    if (i < first_free) {
-      problem.SetParameterBlockConstant(q[i].coeffs().data());
-      problem.SetParameterBlockConstant(p[i].data());
-      return;
-    }
-#if LIOD_CERES_HAS_MANIFOLD
-    problem.SetManifold(q[i].coeffs().data(), &quaternion_manifold);
-#else
-    problem.SetParameterization(q[i].coeffs().data(), &quaternion_manifold);
-#endif
-    if (tilt_sigma_[i] > 0.0) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<TiltError, 3, 4>(new TiltError(tilt_up_[i], tilt_sigma_[i])),
-                               nullptr, q[i].coeffs().data());
-    }
-  };
-  if (first_free == 1) add_node_blocks(0);  // the full graph: blocks in node order
-  for (std::size_t i = first_free; i < poses_.size(); ++i) add_node_blocks(i);
-
+  GraphProblem graph(poses_, motions_, tilt_up_, tilt_sigma_, first_free);
+  if (first_free == 1) graph.add_node(0);  // the full graph: blocks in node order
+  for (std::size_t i = first_free; i < poses_.size(); ++i) graph.add_node(i);
   for (const auto& f : factors_) {
     if (f.from < first_free && f.to < first_free) continue;  // between held nodes: a constant
-    add_node_blocks(f.from);
-    add_node_blocks(f.to);
     ++report.factors;
-    ceres::LossFunction* robust = f.loop ? robust_loss(loss, scale) : nullptr;
-    auto* cost = new ceres::AutoDiffCostFunction<RelativePoseError, 6, 4, 3, 4, 3>(
-        new RelativePoseError(f.measured, sqrt_information(f.information)));
-    problem.AddResidualBlock(cost, robust, q[f.from].coeffs().data(), p[f.from].data(), q[f.to].coeffs().data(),
-                             p[f.to].data());
+    graph.add_factor(f, f.loop ? robust_loss(loss, scale) : nullptr);
+  }
+  for (const auto& f : imu_factors_) {
+    if (f.from < first_free && f.to < first_free) continue;
+    ++report.imu_factors;
+    graph.add_imu_factor(f);
   }
 
-  const ceres::Solver::Summary summary = run_solver(problem, max_iterations);
-
-  for (std::size_t i = first_free; i < poses_.size(); ++i) {
-    poses_[i].linear() = q[i].normalized().toRotationMatrix();
-    poses_[i].translation() = p[i];
-  }
+  const ceres::Solver::Summary summary = run_solver(graph.problem(), max_iterations);
+  graph.read_back(poses_, motions_);
   report.iterations = static_cast<int>(summary.iterations.size());
   report.initial_cost = summary.initial_cost;
   report.final_cost = summary.final_cost;
   report.converged = summary.termination_type == ceres::CONVERGENCE;
   return report;
+}
+
+void PoseGraph::transform(const Eigen::Isometry3d& delta) {
+  for (std::size_t k = 0; k < poses_.size(); ++k) {
+    poses_[k] = delta * poses_[k];
+    motions_[k].velocity = delta.linear() * motions_[k].velocity;
+  }
+  for (auto& f : imu_factors_) f.gravity = delta.linear() * f.gravity;
 }
 
 }  // namespace liod

@@ -83,6 +83,7 @@ class Backend {
   const PoseGraph& graph() const { return graph_; }
 
  private:
+  void add_imu_factor(std::size_t previous, const Keyframe& keyframe);
   bool search_loop(std::size_t current);
   bool close_loop(const LoopCheck& check);
   void relocalize(std::size_t node);

@@ -66,6 +66,7 @@ struct BackendConfig {
   double loop_translation_sigma_m = 0.03;      // loop factor: ~2x the registration error measured on the sim drives
   double loop_rotation_sigma_deg = 0.1;
   double tilt_sigma_deg = 0.5;          // gravity (roll/pitch) factor per keyframe; 0 = none
+  bool imu_factors = false;             // IMU preintegration factors, velocity and bias states (LIO-SAM's graph)
   int max_solver_iterations = 50;
   int solve_window_keyframes = 1000;    // a loop's solve frees at most this many newest keyframes; 0 = all
   double keyframe_voxel_m = 0.3;        // keyframe points kept by the backend (body frame)

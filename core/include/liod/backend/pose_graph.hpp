@@ -3,14 +3,18 @@
 // factors between consecutive keyframes (LiDAR-inertial odometry) and across loops (scan-to-map
 // registration), a tilt factor per node (roll/pitch are observable from gravity in the
 // tightly coupled front end, so they must not absorb a loop's correction) and the first node
-// held fixed (the prior that defines the world frame). Solved with Ceres; Ceres stays inside
-// pose_graph.cpp so that its headers never reach the rest of liod.
+// held fixed (the prior that defines the world frame). LIO-SAM's graph adds to a node its velocity
+// and IMU biases and an IMU preintegration factor to its predecessor (imu_factor.hpp); a node
+// reached by none keeps its pose only. Solved with Ceres; Ceres stays inside pose_graph.cpp so
+// that its headers never reach the rest of liod.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <memory>
 #include <vector>
+
+#include "liod/imu_preintegration.hpp"
 
 namespace liod {
 
@@ -29,6 +33,24 @@ struct PoseGraphFactor {
   bool loop = false;  // loop factors carry the robust loss
 };
 
+/// A node's velocity (world frame) and IMU biases: the states an IMU factor reaches.
+struct NodeMotion {
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();
+  Eigen::Vector3d accel_bias = Eigen::Vector3d::Zero();
+};
+
+/// The IMU between two nodes, preintegrated (Forster et al. eq. 45), and the biases' random walk
+/// over that stretch.
+struct ImuGraphFactor {
+  std::size_t from = 0;
+  std::size_t to = 0;
+  std::shared_ptr<const ImuPreintegration> preintegration;
+  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  // in the graph's world frame
+  double gyro_bias_walk_sigma = 1.0;   // rad/s over the stretch
+  double accel_bias_walk_sigma = 1.0;  // m/s^2 over the stretch
+};
+
 struct SolveReport {
   double solve_ms = 0.0;
   int iterations = 0;
@@ -37,6 +59,7 @@ struct SolveReport {
   bool converged = false;
   std::size_t nodes = 0;    // nodes optimised (not held)
   std::size_t factors = 0;  // relative-pose factors in the problem
+  std::size_t imu_factors = 0;
 };
 
 class PoseGraph {
@@ -49,6 +72,11 @@ class PoseGraph {
   /// R^T e_z, with a standard deviation in rad on each component.
   void set_tilt(std::size_t node, const Eigen::Vector3d& up_in_body, double sigma_rad);
   void add_factor(const PoseGraphFactor& factor);
+  void set_motion(std::size_t node, const NodeMotion& motion) { motions_[node] = motion; }
+  void add_imu_factor(ImuGraphFactor factor) { imu_factors_.push_back(std::move(factor)); }
+  /// Moves every node rigidly into another world frame (poses, velocities, gravity): the factors
+  /// are relative and stay as they are.
+  void transform(const Eigen::Isometry3d& delta);
   /// Removes the most recent factor (a loop the consistency check rejected).
   void pop_factor() { factors_.pop_back(); }
 
@@ -63,8 +91,12 @@ class PoseGraph {
   const Eigen::Isometry3d& pose(std::size_t node) const { return poses_[node]; }
   void set_pose(std::size_t node, const Eigen::Isometry3d& pose) { poses_[node] = pose; }
   const std::vector<PoseGraphFactor>& factors() const { return factors_; }
+  const NodeMotion& motion(std::size_t node) const { return motions_[node]; }
+  const std::vector<ImuGraphFactor>& imu_factors() const { return imu_factors_; }
   /// Whitened residual norm of a factor at the current poses (sqrt of its squared Mahalanobis distance).
   double whitened_error(const PoseGraphFactor& factor) const;
+  /// The same of an IMU factor's 9 preintegration residuals [rotation, velocity, position].
+  Eigen::Matrix<double, 9, 1> whitened_error(const ImuGraphFactor& factor) const;
 
  private:
   SolveReport solve(RobustLoss loss, double scale, int max_iterations, std::size_t first_free);
@@ -73,6 +105,8 @@ class PoseGraph {
   std::vector<Eigen::Vector3d> tilt_up_;
   std::vector<double> tilt_sigma_;
   std::vector<PoseGraphFactor> factors_;
+  std::vector<NodeMotion> motions_;
+  std::vector<ImuGraphFactor> imu_factors_;
 };
 
 }  // namespace liod
