@@ -12,7 +12,8 @@
 # 5. the sysusers.d and tmpfiles.d entries applied to a scratch root make the liod user in the
 #    unit's groups and /var/lib/liod owned by it;
 # 6. the C header compiles as C99 and the Python module imports, from the staging root.
-# Prints what it checked; exits non-zero at the first failure.
+# Prints what it checked; exits non-zero at the first failure. LIOD_EMULATOR (e.g. "qemu-aarch64-static
+# -L SYSROOT", set by scripts/arm64.sh) runs the staged binary of a cross-built package.
 set -euo pipefail
 build=${1:?usage: scripts/check-package.sh BUILD_DIR}
 cd "$(dirname "$0")/.."
@@ -90,7 +91,7 @@ systemd-analyze verify "$work/liod.service" || fail "systemd-analyze verify"
 echo "verify: OK"
 
 echo "== check-config"
-"$stage/usr/bin/liod" check-config --config "$stage/etc/liod/liod.yaml"
+${LIOD_EMULATOR:-} "$stage/usr/bin/liod" check-config --config "$stage/etc/liod/liod.yaml"
 
 echo "== sysusers.d, tmpfiles.d"
 root=$work/root

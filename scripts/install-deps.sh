@@ -11,8 +11,8 @@ packages=(
   libspdlog-dev libfmt-dev libyaml-cpp-dev
   libgpiod-dev libsystemd-dev
   libcli11-dev nlohmann-json3-dev
-  libgtest-dev libgmock-dev libbenchmark-dev libstb-dev
-  python3
+  libgtest-dev libgmock-dev libbenchmark-dev
+  python3 python3-matplotlib   # liod-eval's plots (tools/eval/liod-eval-plot, run by /usr/bin/python3)
   clang
   dpkg-dev file systemd   # the Debian package and its check: dpkg-shlibdeps, file (CPack finds the ELF
                           # files with it), systemd-analyze, -sysusers, -tmpfiles (scripts/check-package.sh)

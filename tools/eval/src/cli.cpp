@@ -29,6 +29,7 @@ struct CliArgs {
   std::string delta_unit = "s";
   std::size_t kitti_step = 10;
   std::string plot;
+  std::string pairs;
   std::string plot_plane = "auto";
   std::string up = "auto";
   bool json = false;
@@ -87,7 +88,11 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
                        ->check(CLI::IsMember({"m", "s", "frames"}));
   app.add_option("--kitti-step", a.kitti_step, "KITTI metric: frames between segment starts (devkit: 10)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--plot", a.plot, "Write a PNG: top view of both trajectories, ATE against distance");
+  app.add_option("--plot", a.plot,
+                 "Write a PNG (matplotlib, via liod-eval-plot): top views of both trajectories and of the "
+                 "estimate coloured by its ATE, ATE against distance");
+  app.add_option("--pairs", a.pairs,
+                 "Write the associated pairs as CSV: ground truth, aligned estimate, ATE (liod-eval-plot's input)");
   app.add_option("--plot-plane", a.plot_plane, "auto|xy|xz|yz (auto: the plane the ground truth spreads in)")
       ->check(CLI::IsMember({"auto", "xy", "xz", "yz"}));
   app.add_option("--up", a.up,
@@ -129,6 +134,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
 
     EvalResult result = evaluate(gt, est, o);
     if (!rpe_note.empty()) result.notes.insert(result.notes.begin(), rpe_note);
+    if (!a.pairs.empty()) write_pairs(a.pairs, result);
     if (!a.plot.empty()) {
       PlotOptions po;
       po.plane = a.plot_plane;
@@ -138,6 +144,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
       out << to_json(result).dump(2) << '\n';
     } else {
       out << format_table(result);
+      if (!a.pairs.empty()) out << "pairs          " << a.pairs << '\n';
       if (!a.plot.empty()) out << "plot           " << a.plot << '\n';
     }
     return 0;
