@@ -67,15 +67,15 @@ set(CPACK_DEBIAN_PACKAGE_DESCRIPTION "${PROJECT_DESCRIPTION}
  A real-time LiDAR-inertial odometry and SLAM daemon for an RS-Helios LiDAR and an
  IMU, run by systemd (liod.service), publishing poses on a Unix socket. Includes a
  C header and a Python module for reading the pose socket.")
-# The shared libraries the binary links (yaml-cpp, spdlog, fmt, systemd, gpiod, and Ceres's glog,
-# SuiteSparse and LAPACK/BLAS; the binary needs no libceres), from dpkg-shlibdeps; where it is
-# missing, this list of Debian 12's packages of them.
+# The shared libraries the binary links (yaml-cpp, spdlog, fmt, systemd, gpiod, the bag chunks'
+# bzip2, LZ4, Zstandard and zlib, and Ceres's glog, SuiteSparse and LAPACK/BLAS; the binary needs
+# no libceres), from dpkg-shlibdeps; where it is missing, this list of Debian 12's packages of them.
 find_program(LIOD_DPKG_SHLIBDEPS dpkg-shlibdeps)
 if(LIOD_DPKG_SHLIBDEPS)
   set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 else()
   set(CPACK_DEBIAN_PACKAGE_DEPENDS
-      "libc6, libstdc++6, libgcc-s1, libyaml-cpp0.7, libspdlog1.10-fmt9, libfmt9, libsystemd0, libgpiod2, libgoogle-glog0v6, libcholmod3, libcxsparse3, liblapack3, libatlas3-base | libblas3")
+      "libc6, libstdc++6, libgcc-s1, libyaml-cpp0.7, libspdlog1.10-fmt9, libfmt9, libsystemd0, libgpiod2, libbz2-1.0, liblz4-1, libzstd1, zlib1g, libgoogle-glog0v6, libcholmod3, libcxsparse3, liblapack3, libatlas3-base | libblas3")
 endif()
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "systemd")
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS "python3")
