@@ -81,6 +81,15 @@ std::vector<std::uint8_t> read_range(const ByteSource& source, std::uint64_t off
   return bytes;
 }
 
+std::vector<BagTopic> distinct_topics(const std::vector<BagTopic>& all) {
+  std::vector<BagTopic> out;
+  for (const BagTopic& t : all) {
+    const bool seen = std::any_of(out.begin(), out.end(), [&](const BagTopic& o) { return o.name == t.name && o.type == t.type; });
+    if (!seen) out.push_back(t);
+  }
+  return out;
+}
+
 }  // namespace detail
 
 std::unique_ptr<ByteSource> open_file_bytes(const std::filesystem::path& path) { return std::make_unique<FileBytes>(path); }

@@ -35,12 +35,9 @@ class McapReader : public BagReader {
 
   std::vector<BagTopic> topics() override {
     if (!read_summary()) walk(nullptr, nullptr);
-    std::vector<BagTopic> out;
-    for (const auto& [id, topic] : channels_) {
-      const bool seen = std::any_of(out.begin(), out.end(), [&](const BagTopic& t) { return t.name == topic.name && t.type == topic.type; });
-      if (!seen) out.push_back(topic);
-    }
-    return out;
+    std::vector<BagTopic> all;
+    for (const auto& entry : channels_) all.push_back(entry.second);
+    return distinct_topics(all);
   }
 
   void read(const std::string& topic, const McapVisit& visit) override { walk(&topic, &visit); }

@@ -90,12 +90,9 @@ class Ros1BagReader : public BagReader {
       for (std::uint64_t pos = index_pos_; pos < src_->size();) pos = file_record(pos, nullptr, nullptr);
     }
     if (index_pos_ == 0 || connections_.size() < connection_count_) walk(nullptr, nullptr);
-    std::vector<BagTopic> out;
-    for (const auto& [id, topic] : connections_) {
-      const bool seen = std::any_of(out.begin(), out.end(), [&](const BagTopic& t) { return t.name == topic.name && t.type == topic.type; });
-      if (!seen) out.push_back(topic);
-    }
-    return out;
+    std::vector<BagTopic> all;
+    for (const auto& entry : connections_) all.push_back(entry.second);
+    return distinct_topics(all);
   }
 
   void read(const std::string& topic, const BagVisit& visit) override { walk(&topic, &visit); }

@@ -4,7 +4,6 @@
 #include <array>
 #include <bit>
 #include <cmath>
-#include <limits>
 #include <optional>
 
 #include "field_cursor.hpp"
@@ -49,6 +48,14 @@ RosStamp header(FieldCursor& c, MessageEncoding encoding, std::string* frame_id)
   return s;
 }
 
+/// The message must end here: ROS 1 exactly, CDR up to the 3 bytes that pad a payload to a
+/// multiple of 4 (RTPS 10.5). Bytes beyond are a message of another type.
+void expect_end(const FieldCursor& c, MessageEncoding encoding, const char* type) {
+  if (c.remaining() > (encoding == MessageEncoding::Cdr ? 3U : 0U)) {
+    c.fail(std::to_string(c.remaining()) + " bytes after the end of a " + type + ": a message of another type?");
+  }
+}
+
 Eigen::Vector3d vector3(FieldCursor& c, const char* what) {
   const double x = c.f64(what), y = c.f64(what), z = c.f64(what);
   return {x, y, z};
@@ -74,7 +81,7 @@ struct FieldReader {
       case PointDatatype::Uint16: return load16(p, big_endian);
       case PointDatatype::Int32: return static_cast<std::int32_t>(load32(p, big_endian));
       case PointDatatype::Uint32: return load32(p, big_endian);
-      case PointDatatype::Float32: return std::bit_cast<float>(load32(p, big_endian));
+      case PointDatatype::Float32: return static_cast<double>(std::bit_cast<float>(load32(p, big_endian)));
       case PointDatatype::Float64: return std::bit_cast<double>(load64(p, big_endian));
     }
     return 0.0;
@@ -106,6 +113,9 @@ std::optional<FieldReader> find_field(const PointCloud2& cloud, std::initializer
 
 enum class TimeKind { RelativeNs, RelativeS, Absolute };
 
+/// More beams than any spinning LiDAR has (the feature extractor keeps a list per ring).
+constexpr double kMaxRings = 1024;
+
 }  // namespace
 
 PointCloud2 decode_point_cloud2(std::span<const std::uint8_t> bytes, MessageEncoding encoding, const std::string& name) {
@@ -128,6 +138,7 @@ PointCloud2 decode_point_cloud2(std::span<const std::uint8_t> bytes, MessageEnco
   m.row_step = c.u32("row_step");
   m.data = c.bytes(c.u32("data length"), "data");
   m.is_dense = c.boolean("is_dense");
+  expect_end(c, encoding, "sensor_msgs/PointCloud2");
   return m;
 }
 
@@ -140,6 +151,7 @@ ImuSample decode_imu(std::span<const std::uint8_t> bytes, MessageEncoding encodi
   for (int i = 0; i < 9; ++i) c.f64("angular_velocity_covariance");
   s.accel = vector3(c, "linear_acceleration");
   for (int i = 0; i < 9; ++i) c.f64("linear_acceleration_covariance");
+  expect_end(c, encoding, "sensor_msgs/Imu");
   if (!s.gyro.allFinite() || !s.accel.allFinite()) throw InputError(name, 0, "angular_velocity or linear_acceleration not finite");
   return s;
 }
@@ -176,7 +188,8 @@ CloudSweep cloud_sweep(const PointCloud2& cloud, const std::string& name, std::u
   CloudConversionStats counts;
   std::vector<double> offsets;  // each point's time after `base`, s
   sweep.points.reserve(static_cast<std::size_t>(std::uint64_t{cloud.width} * cloud.height));
-  for (std::uint32_t r = 0; r < cloud.height; ++r) {
+  const std::uint32_t rows = cloud.width == 0 ? 0 : cloud.height;  // no points: no rows to walk, however many
+  for (std::uint32_t r = 0; r < rows; ++r) {
     for (std::uint32_t k = 0; k < cloud.width; ++k) {
       const std::uint8_t* p = cloud.data.data() + std::uint64_t{r} * cloud.row_step + std::uint64_t{k} * cloud.point_step;
       LidarPoint q;
@@ -188,7 +201,7 @@ CloudSweep cloud_sweep(const PointCloud2& cloud, const std::string& name, std::u
         continue;
       }
       const double b = (*ring)(p);
-      if (!(b >= 0.0 && b <= std::numeric_limits<std::uint16_t>::max())) throw InputError(name, 0, "ring " + std::to_string(b) + " outside 0..65535");
+      if (!(b >= 0.0 && b < kMaxRings)) throw InputError(name, 0, "ring " + std::to_string(b) + " outside 0.." + std::to_string(kMaxRings - 1));
       q.ring = static_cast<std::uint16_t>(b);
       if (intensity) q.intensity = static_cast<float>((*intensity)(p));
       if (time) {

@@ -66,7 +66,7 @@ struct CloudConversionStats {
 
 /// The cloud as a sweep with per-point ring and (where a time field is there) time. InputError
 /// naming `name`: no x, y, z or ring field, a field that does not fit point_step, data shorter
-/// than height x row_step, a ring outside 0..65535, a finite point with a time that is not, or
+/// than height x row_step, a ring outside 0..1023, a finite point with a time that is not, or
 /// per-point times spanning more than a second (wrong units).
 CloudSweep cloud_sweep(const PointCloud2& cloud, const std::string& name, std::uint64_t sequence,
                        CloudConversionStats* stats = nullptr);
