@@ -8,6 +8,12 @@ find_package(Threads REQUIRED)
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(SYSTEMD REQUIRED IMPORTED_TARGET libsystemd)
 pkg_check_modules(GPIOD REQUIRED IMPORTED_TARGET libgpiod)
+# Bag and MCAP chunks (drivers/include/liod/drivers/bag_reader.hpp): bzip2, LZ4 frames, Zstandard,
+# and zlib's CRC-32.
+find_package(BZip2 REQUIRED)
+find_package(ZLIB REQUIRED)
+pkg_check_modules(LZ4 REQUIRED IMPORTED_TARGET liblz4)
+pkg_check_modules(ZSTD REQUIRED IMPORTED_TARGET libzstd)
 if(LIOD_BUILD_TESTS)
   find_package(GTest REQUIRED)
   find_package(benchmark REQUIRED)

@@ -67,9 +67,9 @@ set(CPACK_DEBIAN_PACKAGE_DESCRIPTION "${PROJECT_DESCRIPTION}
  A real-time LiDAR-inertial odometry and SLAM daemon for an RS-Helios LiDAR and an
  IMU, run by systemd (liod.service), publishing poses on a Unix socket. Includes a
  C header and a Python module for reading the pose socket.")
-# The shared libraries the binary links (yaml-cpp, spdlog, fmt, systemd, gpiod, and Ceres's glog,
-# SuiteSparse and LAPACK/BLAS; the binary needs no libceres), from dpkg-shlibdeps; where it is
-# missing, this list of Debian 12's packages of them.
+# The shared libraries the binary links (yaml-cpp, spdlog, fmt, systemd, gpiod, the bag chunks'
+# bzip2, LZ4, Zstandard and zlib, and Ceres's glog, SuiteSparse and LAPACK/BLAS; the binary needs
+# no libceres), from dpkg-shlibdeps; where it is missing, this list of Debian 12's packages of them.
 # A cross build (cmake/aarch64-linux-gnu.cmake) takes the list: dpkg-shlibdeps looks the libraries
 # up in the host's dpkg database, which holds no arm64 ones (scripts/arm64.sh checks the list
 # against the arm64 binary's NEEDED entries instead).
@@ -78,7 +78,7 @@ if(LIOD_DPKG_SHLIBDEPS AND NOT CMAKE_CROSSCOMPILING)
   set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 else()
   set(CPACK_DEBIAN_PACKAGE_DEPENDS
-      "libc6, libstdc++6, libgcc-s1, libyaml-cpp0.7, libspdlog1.10, libfmt9, libsystemd0, libgpiod2, libgoogle-glog0v6, libcholmod3, libcxsparse3, liblapack3, libatlas3-base | libblas3")
+      "libc6, libstdc++6, libgcc-s1, libyaml-cpp0.7, libspdlog1.10, libfmt9, libsystemd0, libgpiod2, libbz2-1.0, liblz4-1, libzstd1, zlib1g, libgoogle-glog0v6, libcholmod3, libcxsparse3, liblapack3, libatlas3-base | libblas3")
 endif()
 # CPack asks `dpkg --print-architecture`, the host's; a cross build names the target's.
 if(CMAKE_CROSSCOMPILING AND CMAKE_SYSTEM_PROCESSOR MATCHES "^(aarch64|arm64)$")

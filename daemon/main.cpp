@@ -59,16 +59,8 @@ liod::PoseFormat pose_format(const std::string& name) {
   return liod::PoseFormat::Text;
 }
 
-void add_offline_commands(CLI::App& app, Commands& c) {
-  c.check = app.add_subcommand("check-config", "Load and validate configuration files, then exit");
-  c.check->add_option("--config", c.check_paths, "configuration file(s), later ones override")->required()->check(CLI::ExistingFile);
-
-  c.decode = app.add_subcommand("decode", "Decode RS-Helios packets from a pcap into sweeps (PCD)");
-  c.decode->add_option("--pcap", c.decode_options.pcap, "capture file (pcap or pcapng)")->required();
-  c.decode->add_option("--angles", c.decode_options.angles_csv, "calibration CSV (vertical_deg,horizontal_deg) used until a DIFOP arrives");
-  c.decode->add_option("--out", c.decode_options.out_dir, "directory for one PCD file per sweep");
-
-  c.replay = app.add_subcommand("replay", "Run a recorded drive (LiDAR pcap + IMU CSV, or a KITTI raw drive) through the odometry");
+void add_replay_command(CLI::App& app, Commands& c) {
+  c.replay = app.add_subcommand("replay", "Run a recorded drive (LiDAR pcap + IMU CSV, a KITTI raw drive, or a ROS bag) through the odometry");
   auto& r = c.replay_options;
   c.replay->add_option("--config", c.replay_configs, "configuration file(s), later ones override")->required()->check(CLI::ExistingFile);
   auto* pcap = c.replay->add_option("--pcap", r.pcap, "LiDAR packets (pcap or pcapng)")->check(CLI::ExistingFile);
@@ -76,11 +68,19 @@ void add_offline_commands(CLI::App& app, Commands& c) {
   auto* kitti = c.replay->add_option("--kitti-raw", r.kitti_raw,
                                      "a KITTI raw drive's folder (velodyne_points/, oxts/, calib_imu_to_velo.txt here or in its parent) "
                                      "instead of --pcap and --imu")->check(CLI::ExistingDirectory);
-  kitti->excludes(pcap)->excludes(imu);
+  auto* bag = c.replay->add_option("--bag", r.bag, "a ROS 1 bag (.bag) or an MCAP file (.mcap, ROS 2) instead of --pcap and --imu: "
+                                                  "sensor_msgs/PointCloud2 and sensor_msgs/Imu on the topics below")->check(CLI::ExistingFile);
+  auto* lidar_topic = c.replay->add_option("--lidar-topic", r.lidar_topic, "--bag: the point clouds' topic")->needs(bag);
+  auto* imu_topic = c.replay->add_option("--imu-topic", r.imu_topic, "--bag: the IMU's topic")->needs(bag);
+  bag->needs(lidar_topic)->needs(imu_topic);
+  kitti->excludes(pcap)->excludes(imu)->excludes(bag);
+  bag->excludes(pcap)->excludes(imu);
   pcap->needs(imu);
   imu->needs(pcap);
-  c.replay->callback([pcap, kitti] {
-    if (pcap->count() == 0 && kitti->count() == 0) throw CLI::RequiredError("--pcap and --imu, or --kitti-raw,");
+  c.replay->callback([pcap, kitti, bag] {
+    if (pcap->count() == 0 && kitti->count() == 0 && bag->count() == 0) {
+      throw CLI::RequiredError("--pcap and --imu, --kitti-raw, or --bag with --lidar-topic and --imu-topic,");
+    }
   });
   c.replay->add_option("--trajectory", r.trajectory_tum, "output: scan-rate poses, TUM format")->required();
   c.replay->add_option("--imu-rate-trajectory", r.imu_rate_tum, "output: IMU-rate poses, TUM format");
@@ -91,6 +91,16 @@ void add_offline_commands(CLI::App& app, Commands& c) {
   r.progress = true;
   c.replay->add_option("--pace", r.pace, "replay at this multiple of the recorded pace (1 = as recorded); default: as fast as possible, deterministic")->check(CLI::Range(0.0, 1000.0));
   c.replay->add_option("--pose-socket", r.pose_socket, "also serve the poses on this Unix socket (see docs/pose-protocol.md)");
+}
+
+void add_offline_commands(CLI::App& app, Commands& c) {
+  c.check = app.add_subcommand("check-config", "Load and validate configuration files, then exit");
+  c.check->add_option("--config", c.check_paths, "configuration file(s), later ones override")->required()->check(CLI::ExistingFile);
+
+  c.decode = app.add_subcommand("decode", "Decode RS-Helios packets from a pcap into sweeps (PCD)");
+  c.decode->add_option("--pcap", c.decode_options.pcap, "capture file (pcap or pcapng)")->required();
+  c.decode->add_option("--angles", c.decode_options.angles_csv, "calibration CSV (vertical_deg,horizontal_deg) used until a DIFOP arrives");
+  c.decode->add_option("--out", c.decode_options.out_dir, "directory for one PCD file per sweep");
 
   c.calibrate = app.add_subcommand("calibrate", "Estimate the LiDAR-IMU extrinsic and time offset from a recorded drive with turns");
   auto& k = c.calibrate_options;
@@ -175,6 +185,7 @@ int main(int argc, char** argv) {
   app.add_option("--log-level", log_level, "trace|debug|info|warn|error|critical|off (overrides log.level)");
   Commands commands;
   add_offline_commands(app, commands);
+  add_replay_command(app, commands);
   add_live_commands(app, commands);
   add_map_commands(app, commands);
   CLI11_PARSE(app, argc, argv);

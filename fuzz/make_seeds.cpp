@@ -28,6 +28,7 @@
 #include "liod/drivers/mtdata2.hpp"
 #include "liod/drivers/pcap_reader.hpp"
 #include "liod/drivers/rs_helios_difop.hpp"
+#include "bag_writer.hpp"
 #include "test_support.hpp"
 
 namespace {
@@ -337,6 +338,47 @@ void pipeline_seeds(SeedWriter& out) {
   out.write("fuzz_pipeline", "tiny-sweeps-turning", tiny_drive(msop, 5, 200));
 }
 
+/// Small bags and MCAP files of two 16-point sweeps and a few IMU samples: every chunk codec,
+/// the drivers' point layouts, ROS 1 serialization and CDR of both byte orders.
+void bag_seeds(SeedWriter& out) {
+  namespace bw = liod::test;
+  liod::Scan scan;
+  for (int k = 0; k < 8; ++k) {
+    for (std::uint16_t r = 0; r < 2; ++r) {
+      liod::LidarPoint p;
+      p.x = static_cast<float>(5.0 * std::cos(k * 0.785));
+      p.y = static_cast<float>(5.0 * std::sin(k * 0.785));
+      p.z = r - 0.5F;
+      p.ring = r;
+      p.time = 0.0125F * static_cast<float>(k);
+      scan.points.push_back(p);
+    }
+  }
+  const std::vector<bw::TopicSpec> topics{{"/points", "sensor_msgs/PointCloud2"}, {"/imu", "sensor_msgs/Imu"}};
+  auto messages = [&](bw::CloudLayout layout, bw::Serialization s) {
+    std::vector<bw::MessageSpec> m;
+    for (int i = 0; i < 6; ++i) {
+      const double t = 1.7e9 + 0.05 * i;
+      if (i % 3 == 0) m.push_back({0, bw::Stamp::of(t + 0.1).ns(), bw::serialize_cloud(scan, bw::Stamp::of(t), {layout, s})});
+      liod::ImuSample imu;
+      imu.time = t;
+      imu.accel = Eigen::Vector3d(0.1, 0.0, 9.81);
+      m.push_back({1, bw::Stamp::of(t).ns(), bw::serialize_imu(imu, s)});
+    }
+    return m;
+  };
+  const auto ros1 = messages(bw::CloudLayout::Velodyne, bw::Serialization::Ros1);
+  for (const char* codec : {"none", "bz2", "lz4"}) {
+    out.write("fuzz_ros_bag", std::string("velodyne-") + codec, bw::write_ros1_bag(topics, ros1, {codec, 400}));
+  }
+  out.write("fuzz_ros_bag", "hesai-unindexed", bw::write_ros1_bag(topics, messages(bw::CloudLayout::Hesai, bw::Serialization::Ros1), {"none", 400, false}));
+  out.write("fuzz_mcap", "ouster-le", bw::write_mcap(topics, messages(bw::CloudLayout::Ouster, bw::Serialization::CdrLittle), {"", 400}));
+  out.write("fuzz_mcap", "livox-be-zstd", bw::write_mcap(topics, messages(bw::CloudLayout::Livox, bw::Serialization::CdrBig), {"zstd", 400}));
+  out.write("fuzz_mcap", "notime-lz4-no-summary",
+            bw::write_mcap(topics, messages(bw::CloudLayout::NoTime, bw::Serialization::CdrLittle), {"lz4", 400, false}));
+  out.write("fuzz_mcap", "velodyne-ros1", bw::write_mcap(topics, ros1, {"", 400, true, "ros1"}));
+}
+
 int main(int argc, char** argv) {
   if (argc != 2) {
     std::cerr << "usage: " << argv[0] << " OUT_DIR\n";
@@ -361,6 +403,7 @@ int main(int argc, char** argv) {
     can_seeds(out);
     pose_seeds(out);
     text_seeds(out);
+    bag_seeds(out);
   } catch (const std::exception& e) {
     std::cerr << "liod-fuzz-seeds: " << e.what() << '\n';
     return 1;

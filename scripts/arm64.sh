@@ -63,6 +63,7 @@ sysroot_packages=(
   libeigen3-dev libceres-dev libpcl-dev
   libspdlog-dev libfmt-dev libyaml-cpp-dev
   libgpiod-dev libsystemd-dev
+  libbz2-dev liblz4-dev libzstd-dev zlib1g-dev
   libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )

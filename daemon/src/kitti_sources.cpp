@@ -6,12 +6,6 @@
 #include "liod/drivers/kitti_raw.hpp"
 
 namespace liod {
-namespace {
-
-std::int64_t to_ns(double seconds) { return static_cast<std::int64_t>(std::llround(seconds * 1e9)); }
-
-}  // namespace
-
 KittiLidarSource::KittiLidarSource(std::filesystem::path drive, std::shared_ptr<const PaceClock> pace)
     : drive_(std::move(drive)), pace_(std::move(pace)) {}
 

@@ -16,6 +16,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "liod/daemon/bag_sources.hpp"
 #include "liod/daemon/kitti_sources.hpp"
 #include "liod/daemon/pipeline.hpp"
 #include "liod/daemon/sources.hpp"
@@ -105,7 +106,7 @@ bool close_outputs(TrajectoryWriter& trajectory, TrajectoryWriter* imu_rate, Tra
   return errors.empty();
 }
 
-/// The replay's LiDAR input: packets from a pcap, or a KITTI raw drive's sweeps.
+/// The replay's LiDAR input: packets from a pcap, a KITTI raw drive's sweeps, or a bag's clouds.
 struct LidarInput {
   std::unique_ptr<LidarSource> source;
   std::function<std::uintmax_t()> done;  // progress, against total
@@ -149,6 +150,51 @@ LidarInput kitti_input(const ReplayOptions& options, const std::shared_ptr<PaceC
   return in;
 }
 
+LidarInput bag_input(const ReplayOptions& options, const std::shared_ptr<PaceClock>& pace) {
+  auto source = std::make_unique<BagLidarSource>(options.bag, options.lidar_topic, pace);
+  BagLidarSource* bag = source.get();
+  LidarInput in;
+  in.source = std::move(source);
+  in.done = [bag] { return bag->sweeps_read(); };
+  in.total = 0;  // unknown without reading the file through: no progress bar
+  in.report = [bag, topic = options.lidar_topic](std::ostream& out) {
+    out << "sweeps: " << bag->sweeps_read() << " read from " << topic << ", " << bag->points_dropped()
+        << " points not finite or too near\n";
+  };
+  in.warn = [] {};
+  return in;
+}
+
+LidarInput lidar_input(Pipeline& pipeline, const ReplayOptions& options, const std::vector<std::uint16_t>& ports,
+                       const std::shared_ptr<PaceClock>& pace) {
+  if (!options.kitti_raw.empty()) return kitti_input(options, pace);
+  if (!options.bag.empty()) return bag_input(options, pace);
+  return pcap_input(pipeline, options, ports, pace);
+}
+
+std::unique_ptr<ImuSource> imu_input(const ReplayOptions& options, const std::shared_ptr<PaceClock>& pace) {
+  if (!options.kitti_raw.empty()) return std::make_unique<KittiImuSource>(options.kitti_raw, pace);
+  if (!options.bag.empty()) return std::make_unique<BagImuSource>(options.bag, options.imu_topic, pace);
+  return std::make_unique<CsvImuSource>(options.imu_csv, pace);
+}
+
+/// Where the pace clock starts: the earlier of the inputs' first stamps (the later one when the
+/// other has none).
+std::int64_t data_start_ns(const ReplayOptions& options, const std::vector<std::uint16_t>& ports) {
+  std::int64_t t_lidar = 0, t_imu = 0;
+  if (!options.kitti_raw.empty()) {
+    t_lidar = first_kitti_sweep_ns(options.kitti_raw);
+    t_imu = first_kitti_imu_ns(options.kitti_raw);
+  } else if (!options.bag.empty()) {
+    t_lidar = first_bag_cloud_ns(options.bag, options.lidar_topic);
+    t_imu = first_bag_imu_ns(options.bag, options.imu_topic);
+  } else {
+    t_lidar = first_pcap_time_ns(options.pcap, ports);
+    t_imu = first_imu_time_ns(options.imu_csv);
+  }
+  return (t_lidar == 0 || t_imu == 0) ? std::max(t_lidar, t_imu) : std::min(t_lidar, t_imu);
+}
+
 /// The configuration with the KITTI drive's calib_imu_to_velo.txt as its extrinsics.
 Config with_kitti_extrinsics(const Config& config, const std::string& drive) {
   Config c = config;
@@ -177,6 +223,7 @@ void print_summary(Pipeline& pipeline, const LidarInput& input, double wall_s, s
 int run_replay(const Config& given, const ReplayOptions& options, std::ostream& out) {
   const auto wall_start = std::chrono::steady_clock::now();
   const bool kitti = !options.kitti_raw.empty();
+  if (!options.bag.empty()) check_bag_topics(options.bag, options.lidar_topic, options.imu_topic);
   const Config config = kitti ? with_kitti_extrinsics(given, options.kitti_raw) : given;
   const std::vector<std::uint16_t> ports{static_cast<std::uint16_t>(config.lidar.msop_port),
                                          static_cast<std::uint16_t>(config.lidar.difop_port)};
@@ -184,9 +231,7 @@ int run_replay(const Config& given, const ReplayOptions& options, std::ostream& 
   // a paced replay keeps the recorded interleaving of LiDAR and IMU.
   auto pace = std::make_shared<PaceClock>();
   pace->pace = options.pace;
-  const std::int64_t t_lidar = kitti ? first_kitti_sweep_ns(options.kitti_raw) : first_pcap_time_ns(options.pcap, ports);
-  const std::int64_t t_imu = kitti ? first_kitti_imu_ns(options.kitti_raw) : first_imu_time_ns(options.imu_csv);
-  pace->data_start_ns = (t_lidar == 0 || t_imu == 0) ? std::max(t_lidar, t_imu) : std::min(t_lidar, t_imu);
+  pace->data_start_ns = data_start_ns(options, ports);
 
   TrajectoryWriter trajectory(options.trajectory_tum);
   std::unique_ptr<TrajectoryWriter> imu_rate;
@@ -223,12 +268,9 @@ int run_replay(const Config& given, const ReplayOptions& options, std::ostream& 
     }
     scan_log.write(m.time, ev.diagnostics);
   });
-  LidarInput input = kitti ? kitti_input(options, pace) : pcap_input(pipeline, options, ports, pace);
-  std::unique_ptr<ImuSource> imu_source;
-  if (kitti) imu_source = std::make_unique<KittiImuSource>(options.kitti_raw, pace);
-  else imu_source = std::make_unique<CsvImuSource>(options.imu_csv, pace);
+  LidarInput input = lidar_input(pipeline, options, ports, pace);
   pace->host_start_steady_ns = steady_ns();
-  pipeline.start(std::move(input.source), std::move(imu_source));
+  pipeline.start(std::move(input.source), imu_input(options, pace));
 
   ProgressBar progress(options.progress, input.total);
   while (!pipeline.finished() && pipeline.error().empty()) {
@@ -249,7 +291,7 @@ int run_replay(const Config& given, const ReplayOptions& options, std::ostream& 
   const bool complete = close_outputs(trajectory, imu_rate.get(), map_frame.get(), scan_log, out);
   out << "trajectory: " << options.trajectory_tum << (complete ? "" : " (incomplete)") << '\n';
   if (pipeline.totals().processed == 0) {
-    spdlog::error("no pose was estimated: check that the IMU log and the pcap cover the same time span");
+    spdlog::error("no pose was estimated: check that the IMU and the LiDAR input cover the same time span");
     return 1;
   }
   return complete ? 0 : 1;

@@ -112,7 +112,7 @@ void CsvImuSource::run(ImuOutput& out, const std::atomic<bool>& stop) {
   ImuSample s;
   std::size_t n = 0;
   while (reader.next(s)) {
-    if (!pace_->wait_until(static_cast<std::int64_t>(std::llround(s.time * 1e9)), stop, [&] { out.heartbeat(); })) break;
+    if (!pace_->wait_until(to_ns(s.time), stop, [&] { out.heartbeat(); })) break;
     out.sample(s);
     if ((++n & 63) == 0) out.heartbeat();
   }

@@ -3,6 +3,7 @@
 // IMU CSV) at recorded pace, a multiple of it, or as fast as possible.
 
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -14,6 +15,9 @@
 #include "liod/drivers/pcap_reader.hpp"
 
 namespace liod {
+
+/// A data time in seconds as the pace clock's nanoseconds.
+inline std::int64_t to_ns(double seconds) { return static_cast<std::int64_t>(std::llround(seconds * 1e9)); }
 
 /// Shared by the file sources of one replay so they keep their recorded relative timing:
 /// data time `t` is released at host time start + (t - data_start) / pace.
