@@ -112,6 +112,8 @@ void declare_backend(Schema& s, BackendConfig& b) {
   s.real("backend.max_vertical_m", &b.max_vertical_m, 0.05, 100.0);
   s.real("backend.max_tilt_deg", &b.max_tilt_deg, 0.05, 90.0);
   s.real("backend.robust_loss_scale", &b.robust_loss_scale, 0.0, 1000.0);
+  s.choice("backend.odometry_weights", &b.odometry_weights,
+           {{"covariance", OdometryWeights::kCovariance}, {"fixed", OdometryWeights::kFixed}});
   s.real("backend.odometry_translation_sigma_m", &b.odometry_translation_sigma_m, 1e-4, 100.0);
   s.real("backend.odometry_rotation_sigma_deg", &b.odometry_rotation_sigma_deg, 1e-4, 90.0);
   s.real("backend.loop_translation_sigma_m", &b.loop_translation_sigma_m, 1e-4, 100.0);

@@ -320,7 +320,8 @@ void LidarInertialOdometry::update_map(const DeskewedFeatures& features, Odometr
   // either; as a keyframe it would only push good keyframes out of the window.
   if (!(result.status & kStatusFewFeatures) && window_.consider(features, state_, result.hausdorff_m)) {
     result.status |= kStatusKeyframe;
-    window_.set_newest_imu(imu_since_keyframe_measured_ ? std::move(imu_since_keyframe_) : std::vector<ImuInterval>{});
+    window_.set_newest_for_backend(covariance_.topLeftCorner<6, 6>(),
+                                   imu_since_keyframe_measured_ ? std::move(imu_since_keyframe_) : std::vector<ImuInterval>{});
     imu_since_keyframe_.clear();
     imu_since_keyframe_measured_ = true;
   }

@@ -27,7 +27,10 @@ constexpr std::uint32_t kNgEnhancedPacket = 6;
 constexpr std::uint32_t kMaxRecordBytes = 256 * 1024;
 constexpr std::uint32_t kMaxBlockBytes = kMaxRecordBytes + 4096;
 
-/// pcapng per-interface state (IDB): link type and timestamp units.
+}  // namespace
+
+/// pcapng per-interface state (IDB): link type and timestamp units. Not in the anonymous
+/// namespace: PcapReader::Impl, whose class has external linkage, holds them.
 struct NgInterface {
   std::uint32_t link_type = 0;
   std::uint32_t snaplen = 0;
@@ -63,8 +66,6 @@ struct NgInterface {
     return static_cast<std::int64_t>(ns + static_cast<std::uint64_t>(offset_s) * 1'000'000'000ULL);
   }
 };
-
-}  // namespace
 
 struct PcapReader::Impl {
   std::string path;

@@ -20,7 +20,7 @@ using liod::test::analytic_state;
 const Eigen::Vector3d kGyroBias(0.002, -0.003, 0.01);
 const Eigen::Vector3d kAccelBias(0.05, -0.03, 0.08);
 constexpr double kKeyframeStep_s = 0.5;
-constexpr int kKeyframes = 21;
+constexpr int kNodes = 21;
 
 Eigen::Isometry3d pose_of(const liod::NavState& s) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
@@ -52,12 +52,12 @@ liod::ImuGraphFactor imu_factor(const std::deque<liod::ImuSample>& samples, std:
 // this motion's roll and pitch rates turns gravity's share of the specific force by a few mm/s^2
 // at 200 Hz, and this test checks the factor's algebra, not the discretisation.
 TEST(ImuFactors, RecoverBiasesAndVelocitiesAlongAnExactPoseChain) {
-  const auto samples = liod::test::analytic_imu(kKeyframes * kKeyframeStep_s, 1000.0, kGyroBias, kAccelBias);
+  const auto samples = liod::test::analytic_imu(kNodes * kKeyframeStep_s, 1000.0, kGyroBias, kAccelBias);
   liod::ImuNoise noise;
   noise.gyro_noise_density = 5e-4;
   noise.accel_noise_density = 5e-3;
   liod::PoseGraph graph;
-  for (int i = 0; i < kKeyframes; ++i) {
+  for (int i = 0; i < kNodes; ++i) {
     const liod::NavState truth = analytic_state(i * kKeyframeStep_s);
     graph.add_node(pose_of(truth));
     // What the graph starts from: velocities 0.3 m/s off, biases unknown (zero).
@@ -72,8 +72,8 @@ TEST(ImuFactors, RecoverBiasesAndVelocitiesAlongAnExactPoseChain) {
     graph.add_imu_factor(imu_factor(samples, i - 1, noise));
   }
   const liod::SolveReport report = graph.optimize(liod::RobustLoss::kNone, 0.0, 50);
-  EXPECT_EQ(report.imu_factors, static_cast<std::size_t>(kKeyframes - 1));
-  for (int i : {0, kKeyframes / 2, kKeyframes - 1}) {
+  EXPECT_EQ(report.imu_factors, static_cast<std::size_t>(kNodes - 1));
+  for (int i : {0, kNodes / 2, kNodes - 1}) {
     const liod::NodeMotion& m = graph.motion(i);
     SCOPED_TRACE("node " + std::to_string(i));
     EXPECT_LT((m.gyro_bias - kGyroBias).norm(), 5e-4);

@@ -10,9 +10,13 @@
 
 namespace liod {
 
+/// A pose's covariance in the front end's error state order: [dtheta (right perturbation, body), dp (world)].
+using PoseCovariance = Eigen::Matrix<double, 6, 6>;
+
 struct Keyframe {
   std::uint64_t id = 0;
   NavState state;  // body (IMU) frame at the scan's end, on the IMU clock
+  PoseCovariance pose_covariance = PoseCovariance::Zero();  // the filter's, after the scan's update; zero: unknown
   std::vector<Eigen::Vector3d> planes_world;
   std::vector<Eigen::Vector3d> edges_world;
   std::vector<Eigen::Vector3d> post_axes_world;  // edges_world placed on their posts' axes (post_axes), with posts on

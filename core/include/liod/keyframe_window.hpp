@@ -44,8 +44,12 @@ class KeyframeWindow {
   /// Adds the scan (its features at `state`) as a keyframe if the gate lets it: the first scan
   /// always. hausdorff_m: the test's distance, when it ran.
   bool consider(const DeskewedFeatures& features, const NavState& state, double& hausdorff_m);
-  /// The IMU's measurements since the previous keyframe, for the newest one (Keyframe::imu_since_previous).
-  void set_newest_imu(std::vector<ImuInterval> intervals) { keyframes_.back().imu_since_previous = std::move(intervals); }
+  /// What the backend needs of the newest keyframe beyond its points: the filter's pose covariance
+  /// and the IMU's measurements since the previous keyframe (keyframe.hpp).
+  void set_newest_for_backend(const PoseCovariance& covariance, std::vector<ImuInterval> intervals) {
+    keyframes_.back().pose_covariance = covariance;
+    keyframes_.back().imu_since_previous = std::move(intervals);
+  }
   /// Empties the window and the maps (the map is started afresh).
   void restart();
 

@@ -4,11 +4,15 @@
 #include <cmath>
 
 #include "liod/angles.hpp"
+#include "liod/backend/odometry_factor.hpp"
 #include "liod/unit_configs.hpp"
 #include "liod/voxel_grid.hpp"
 
 namespace liod {
 namespace {
+
+constexpr double kOdometryFloor_m = 1e-4;
+constexpr double kOdometryFloor_deg = 1e-3;
 
 Eigen::Isometry3d isometry(const NavState& s) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
@@ -92,9 +96,11 @@ bool Backend::add_keyframe(const Keyframe& keyframe) {
     f.from = previous;
     f.to = node;
     f.measured = increment;
-    f.information = relative_pose_information(b.odometry_translation_sigma_m, b.odometry_rotation_sigma_deg * kDegToRad);
+    f.information = odometry_information(keyframe);
     graph_.add_factor(f);
   }
+  last_state_ = keyframe.state;
+  last_pose_covariance_ = keyframe.pose_covariance;
   const Eigen::Vector3d up = map_up_in_body(k.odometry_pose);
   graph_.set_motion(node, motion_in_graph(keyframe.state, graph_.pose(node)));
   if (b.imu_factors && node > 0) add_imu_factor(node - 1, keyframe);
@@ -116,6 +122,18 @@ bool Backend::add_keyframe(const Keyframe& keyframe) {
   const bool closed = search_loop(node);
   correction_version_ += closed ? 1 : 0;
   return closed;
+}
+
+// The previous keyframe's and this one's covariance carried into their relative pose, or the fixed
+// sigmas where a covariance is unknown.
+Matrix6d Backend::odometry_information(const Keyframe& keyframe) const {
+  const BackendConfig& b = config_.backend;
+  if (b.odometry_weights == OdometryWeights::kCovariance && !last_pose_covariance_.isZero() &&
+      !keyframe.pose_covariance.isZero()) {
+    const Matrix6d covariance = relative_pose_covariance(last_state_, last_pose_covariance_, keyframe.state, keyframe.pose_covariance);
+    return relative_pose_information(covariance, kOdometryFloor_m, kOdometryFloor_deg * kDegToRad);
+  }
+  return relative_pose_information(b.odometry_translation_sigma_m, b.odometry_rotation_sigma_deg * kDegToRad);
 }
 
 // The IMU between the previous keyframe and this one, preintegrated at the previous node's biases.

@@ -84,6 +84,7 @@ class Backend {
 
  private:
   void add_imu_factor(std::size_t previous, const Keyframe& keyframe);
+  Matrix6d odometry_information(const Keyframe& keyframe) const;
   bool search_loop(std::size_t current);
   bool close_loop(const LoopCheck& check);
   void relocalize(std::size_t node);
@@ -104,6 +105,8 @@ class Backend {
   double next_attempt_time_ = -std::numeric_limits<double>::infinity();
   std::uint64_t correction_version_ = 0;
   Eigen::Matrix3d map_from_run_rotation_ = Eigen::Matrix3d::Identity();  // the moves' rotation so far
+  NavState last_state_;                                          // the newest keyframe's, as the front end sent it
+  PoseCovariance last_pose_covariance_ = PoseCovariance::Zero();
 };
 
 }  // namespace liod

@@ -7,6 +7,9 @@
 namespace liod {
 
 enum class LoopDistance { k2D, k3D };
+/// How the odometry factors between consecutive keyframes are weighted: by the front end's pose
+/// covariance (odometry_factor.hpp), or by the fixed sigmas below (LIO-SAM).
+enum class OdometryWeights { kCovariance, kFixed };
 /// map: build the map, continuing a saved one once relocalised in it; localise: track in the saved
 /// map without adding to it (no keyframes persisted, no loops of its own, the map matched instead).
 enum class BackendMode { kMap, kLocalize };
@@ -61,7 +64,8 @@ struct BackendConfig {
   double max_vertical_m = 1.5;          // registered height minus graph height beyond this: false loop
   double max_tilt_deg = 2.0;            // registered vs graph tilt (roll/pitch) beyond this: false loop
   double robust_loss_scale = 3.0;       // Cauchy scale of the loop factors, in sigmas
-  double odometry_translation_sigma_m = 0.05;  // odometry factor between consecutive keyframes
+  OdometryWeights odometry_weights = OdometryWeights::kCovariance;
+  double odometry_translation_sigma_m = 0.05;  // odometry factor between consecutive keyframes (fixed weights)
   double odometry_rotation_sigma_deg = 0.1;
   double loop_translation_sigma_m = 0.03;      // loop factor: ~2x the registration error measured on the sim drives
   double loop_rotation_sigma_deg = 0.1;
