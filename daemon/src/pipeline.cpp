@@ -444,7 +444,7 @@ void Pipeline::process_scan(OdometryLoop& loop, ScanItem& item) {
     else anchors_.publish(anchor);
   }
   if ((result->status & kStatusKeyframe) && !loop.odometry.keyframes().empty()) {
-    KeyframeEvent k{std::make_shared<const Keyframe>(loop.odometry.keyframes().back()), result->covariance, steady_ns()};
+    KeyframeEvent k{std::make_shared<const Keyframe>(loop.odometry.keyframes().back()), steady_ns()};
     if (loop.lockstep) keyframe_ring_.push_wait(k, stop_);
     else keyframe_ring_.try_push(k);
   }

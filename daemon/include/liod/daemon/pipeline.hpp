@@ -81,8 +81,7 @@ struct PoseEvent {
 };
 
 struct KeyframeEvent {
-  std::shared_ptr<const Keyframe> keyframe;
-  StateCovariance covariance = StateCovariance::Zero();
+  std::shared_ptr<const Keyframe> keyframe;  // with the filter's pose covariance (keyframe.hpp)
   std::int64_t queued_steady_ns = 0;  ///< when the odometry handed it to the backend
 };
 
