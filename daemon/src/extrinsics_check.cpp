@@ -96,12 +96,13 @@ void ExtrinsicsCheck::finish_check(const calibration::CalibrationResult& r) {
   const double translation = (e.lidar_to_imu_translation - configured_.lidar_to_imu_translation).norm();
   const double translation_limit = std::max(config_.translation_floor_m, config_.sigmas * r.fit.translation_std.maxCoeff());
   const double offset = std::abs(e.lidar_time_offset_s - configured_.lidar_time_offset_s);
-  suspect_ = rotation > rotation_limit || translation > translation_limit || offset > config_.offset_floor_s;
+  const double offset_limit = std::max(config_.offset_floor_s, config_.sigmas * r.time_shift.shift_std_s);
+  suspect_ = rotation > rotation_limit || translation > translation_limit || offset > offset_limit;
   const auto message = fmt::format(
       "extrinsics check: configured {}; estimated {} (differences {:.2f} deg, {:.3f} m, {:.1f} ms; limits {:.2f} deg, "
       "{:.3f} m, {:.1f} ms)",
       describe(configured_), describe(e), rotation / kRadPerDeg, translation, offset * 1e3, rotation_limit / kRadPerDeg,
-      translation_limit, config_.offset_floor_s * 1e3);
+      translation_limit, offset_limit * 1e3);
   if (suspect_) {
     spdlog::warn("{}: they disagree, poses from now on carry extrinsics_suspect; run liod calibrate", message);
   } else {

@@ -5,6 +5,8 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <functional>
+#include <random>
 #include <vector>
 
 #include "liod/calibration/extrinsic_calibration.hpp"
@@ -110,6 +112,43 @@ TEST(CalibrationMath, TimeShiftIsTheClockOffsetTheConfigurationMisses) {
   ASSERT_TRUE(shift.found);
   EXPECT_NEAR(shift.shift_s, mount.offset - 0.012, 1e-4);
   EXPECT_GT(shift.correlation, 0.99);
+}
+
+// A yaw rate seen by a 200 Hz gyro and, `shift` later on its clock and with noise, by the LiDAR's
+// scan-to-scan rates.
+liod::calibration::TimeShift shift_of_yaw_rate(const std::function<double(double)>& yaw_rate, double shift) {
+  std::vector<ImuSample> imu;
+  for (int k = 0; k <= 200 * 62; ++k) {
+    ImuSample s;
+    s.time = k / 200.0;
+    s.gyro = Eigen::Vector3d(0.0, 0.0, yaw_rate(s.time));
+    s.accel = -kGravity;
+    imu.push_back(s);
+  }
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.003);
+  std::vector<liod::calibration::LidarRate> lidar;
+  for (int k = 5; k < 600; ++k) {
+    liod::calibration::LidarRate r;
+    r.begin = k * 0.1;
+    r.end = r.begin + 0.1;
+    double mean = 0.0;
+    for (int i = 0; i < 100; ++i) mean += yaw_rate(r.begin + shift + (i + 0.5) * 0.001) / 100.0;
+    r.rate = Eigen::Vector3d(0.0, 0.0, mean + noise(rng));
+    lidar.push_back(r);
+  }
+  return liod::calibration::estimate_time_shift(lidar, liod::calibration::GyroIntegral(imu));
+}
+
+TEST(CalibrationMath, TimeShiftUncertaintyGrowsWhenTheTurnRateIsSteady) {
+  constexpr double kShift = 0.005;
+  const auto varied = shift_of_yaw_rate([](double t) { return 0.3 * std::sin(0.5 * t) + 0.1 * std::sin(1.7 * t); }, kShift);
+  const auto steady = shift_of_yaw_rate([](double t) { return 0.3 + 0.004 * std::sin(0.5 * t); }, kShift);
+  ASSERT_TRUE(varied.found);
+  EXPECT_LT(varied.shift_std_s, 1e-3);
+  EXPECT_LT(std::abs(varied.shift_s - kShift), 3.0 * varied.shift_std_s);
+  // A steady turn hardly changes with the shift: the estimate is one, the standard error says so.
+  EXPECT_GT(steady.shift_std_s, 10.0 * varied.shift_std_s);
 }
 
 TEST(CalibrationMath, RatesGiveTheRotationAndTheGyroBias) {

@@ -24,6 +24,11 @@ struct TimeShift {
   double shift_s = 0.0;   // add to the configured offset
   double correlation = 0.0;
   std::size_t intervals = 0;
+  /// Standard error of shift_s: the LiDAR's rates regressed on the gyro's at the shift, the
+  /// residuals' spread against how fast a shift changes the gyro's side, with the effective sample
+  /// size of residuals correlated from interval to interval (AR(1)). Large when the vehicle turns at
+  /// a steady rate (a figure-8, a roundabout): shifting a steady rate changes nothing.
+  double shift_std_s = 0.0;
 };
 
 TimeShift estimate_time_shift(const std::vector<LidarRate>& lidar, const GyroIntegral& gyro,
