@@ -326,6 +326,10 @@ TEST(SimConditions, OpenStretchLeavesGroundAndAHedge) {
     if (dist(b.center.head<2>()) - r < kOpenClearance - 1.0) {
       EXPECT_EQ(b.look.kind, SurfaceKind::Porous);
       EXPECT_LT(b.half.z(), 1.1);
+      // Beside the road (its half width plus 1.6 m from the centre line; the car keeps 2 m right
+      // of that line), not on it.
+      EXPECT_GT(dist(b.center.head<2>()), 5.0);
+      EXPECT_LT(dist(b.center.head<2>()), 32.0);
       ++hedge;
     }
   }

@@ -113,9 +113,10 @@ OpenStretch clear_open_stretch(Scene& scene, const Trajectory& ego, double durat
   for (std::size_t i = h0; i + 4 <= h1; i += 4) {
     auto side = [&](std::size_t k) {
       const Eigen::Vector2d t = (plan.points[std::min(k + 1, plan.points.size() - 1)] - plan.points[k > 0 ? k - 1 : 0]).normalized();
-      const Eigen::Vector2d right(t.y(), -t.x());
       const bool road = plan.road_centre.size() == plan.points.size();
-      return (road ? plan.road_centre[k] : plan.points[k]) + right * ((road ? plan.road_half_width : 2.5) + 1.6);
+      const double reach = (road ? plan.road_half_width : 2.5) + 1.6;
+      const Eigen::Vector2d base = road ? plan.road_centre[k] : plan.points[k];
+      return Eigen::Vector2d(base.x() + reach * t.y(), base.y() - reach * t.x());
     };
     const Eigen::Vector2d a = side(i);
     const Eigen::Vector2d c = side(i + 4);

@@ -161,15 +161,21 @@ Traffic::Traffic(const DrivePlan& plan, const Trajectory& ego, const Terrain& te
     throw std::invalid_argument("--traffic needs a route with lanes (urban, loop, highway, tunnel)");
   }
   Rng rng(derive_seed(seed, kTrafficStream));
-  const bool dual = plan.lanes_with.size() == 2;
-  const double truck_share = dual ? 0.25 : 0.1;
+  const std::size_t first_against = build_lanes(plan);
   const auto steps = static_cast<std::size_t>(std::ceil((duration + 1.0) / kTrafficStep)) + 1;
-  const std::vector<Eigen::Vector2d>& centre = plan.road_centre;
+  const std::vector<float> ego_s = ego_along(lanes_[0].points, ego, steps);
+  for (std::uint32_t li = 0; li < lanes_.size(); ++li) {
+    populate(li, li >= first_against, plan, ego_s, rng);
+  }
+  leave_out_touching(ego, duration);
+}
 
+std::size_t Traffic::build_lanes(const DrivePlan& plan) {
   // Lane 0 is the car's own; then, on a dual carriageway, the other lane of its carriageway (the
   // one the car is not in); then the opposite lanes, each listed in its own driving direction.
+  const std::vector<Eigen::Vector2d>& centre = plan.road_centre;
   lanes_.push_back(Lane{resample_polyline(plan.points, 1.0)});
-  if (dual) {
+  if (plan.lanes_with.size() == 2) {
     std::vector<double> other(centre.size());
     for (std::size_t i = 0; i < centre.size(); ++i) {
       other[i] = plan.lanes_with[0] + plan.lanes_with[1] - (plan.points[i] - centre[i]).norm();
@@ -182,93 +188,77 @@ Traffic::Traffic(const DrivePlan& plan, const Trajectory& ego, const Terrain& te
     std::reverse(pts.begin(), pts.end());
     lanes_.push_back(Lane{resample_polyline(pts, 1.0)});
   }
+  return first_against;
+}
 
-  const std::vector<float> ego_s = ego_along(lanes_[0].points, ego, steps);
-  const double cruise = plan.cruise_speed;
-  for (std::uint32_t li = 0; li < lanes_.size(); ++li) {
-    const std::vector<Eigen::Vector2d>& pts = lanes_[li].points;
-    const std::vector<double> cap = bend_limits(pts);
-    const double length = static_cast<double>(pts.size() - 1);
-    const bool own = li == 0;
-    const bool against = li >= first_against;
-    // Junction stops: the car's own stop lines, mirrored onto the opposite lanes (one road width
-    // back, so that they stop before the junction in their direction).
-    std::vector<Stop> junctions;
-    if (!dual) {
-      for (const Stop& st : plan.stops) {
-        junctions.push_back(Stop{against ? length - st.s - 20.0 : st.s, 0.0});
-      }
-      std::sort(junctions.begin(), junctions.end(), [](const Stop& a, const Stop& b) { return a.s < b.s; });
+void Traffic::populate(std::uint32_t li, bool against, const DrivePlan& plan, const std::vector<float>& ego_s,
+                       Rng& rng) {
+  const bool dual = plan.lanes_with.size() == 2;
+  const bool own = li == 0;
+  const std::vector<Eigen::Vector2d>& pts = lanes_[li].points;
+  const std::vector<double> cap = bend_limits(pts);
+  const double length = static_cast<double>(pts.size() - 1);
+  // Junction stops: the car's own stop lines, mirrored onto the opposite lanes (one road width
+  // back, so that they stop before the junction in their direction).
+  std::vector<Stop> junctions;
+  if (!dual) {
+    for (const Stop& st : plan.stops) {
+      junctions.push_back(Stop{against ? length - st.s - 20.0 : st.s, 0.0});
     }
-    // Spawn positions at t = 0: ahead of the car in its own lane (plus a follower or two behind),
-    // along the whole lane elsewhere.
-    const double mean_gap = own ? 180.0 : (against ? (dual ? 90.0 : 60.0) : 90.0);
-    std::vector<double> starts;
-    const double from = own ? static_cast<double>(ego_s[0]) + rng.uniform(15.0, 40.0)
-                            : (against ? 0.0 : std::max(0.0, static_cast<double>(ego_s[0]) - 300.0));
-    for (double s = from; s < length - 10.0; s += rng.exponential(mean_gap) + 15.0) {
-      starts.push_back(s);
-    }
-    std::vector<double> behind;
-    if (own) {
-      for (int k = rng.uniform_int(0, 2), b = 1; b <= k; ++b) {
-        behind.push_back(static_cast<double>(ego_s[0]) - 12.0 * b - rng.uniform(0.0, 10.0));
-      }
-    }
-    // Front to back in the lane's direction, each kept behind the one before it; in the car's
-    // own lane the car itself is the first one (vehicles ahead are kept ahead of it).
-    auto make = [&](double s0, double speed_lo, double speed_hi) {
-      TrafficVehicle v = draw_vehicle(rng, li, truck_share);
-      Motion m;
-      m.cruise = rng.uniform(speed_lo, speed_hi) * cruise;
-      for (const Stop& st : junctions) {
-        if (rng.bernoulli(0.5)) {
-          m.stops.push_back(Stop{st.s, rng.uniform(2.0, 8.0)});
-        }
-      }
-      v.s = drive_alone(s0, m, cap, steps);
-      return v;
-    };
-    std::vector<TrafficVehicle> lane_vehicles;
-    if (own) {
-      const std::vector<float>* prev = &ego_s;
-      double prev_half = kEgoHalfLength;
-      for (double s0 : starts) {  // ahead of the car, nearest first
-        TrafficVehicle v = make(s0, 0.85, 1.15);
-        keep_gap(v.s, *prev, prev_half + v.half_length + kStandingGap, rng.uniform(1.0, 2.0), true);
-        lane_vehicles.push_back(std::move(v));
-        prev = &lane_vehicles.back().s;
-        prev_half = lane_vehicles.back().half_length;
-      }
-      std::vector<TrafficVehicle> followers;
-      prev = &ego_s;
-      prev_half = kEgoHalfLength;
-      for (double s0 : behind) {
-        TrafficVehicle v = make(s0, 1.0, 1.2);
-        keep_gap(v.s, *prev, prev_half + v.half_length + kStandingGap, rng.uniform(1.2, 2.0), false);
-        followers.push_back(std::move(v));
-        prev = &followers.back().s;
-        prev_half = followers.back().half_length;
-      }
-      for (auto& f : followers) {
-        lane_vehicles.push_back(std::move(f));
-      }
-    } else {
-      std::reverse(starts.begin(), starts.end());
-      for (double s0 : starts) {
-        TrafficVehicle v = make(s0, against ? 0.65 : 0.8, against ? 1.05 : 1.3);
-        if (!lane_vehicles.empty()) {
-          const TrafficVehicle& p = lane_vehicles.back();
-          keep_gap(v.s, p.s, p.half_length + v.half_length + kStandingGap, rng.uniform(1.0, 2.0), false);
-        }
-        lane_vehicles.push_back(std::move(v));
-      }
-    }
-    for (auto& v : lane_vehicles) {
-      vehicles_.push_back(std::move(v));
+    std::sort(junctions.begin(), junctions.end(), [](const Stop& a, const Stop& b) { return a.s < b.s; });
+  }
+  // Spawn positions at t = 0: ahead of the car in its own lane (plus a follower or two behind),
+  // along the whole lane elsewhere.
+  const double mean_gap = own ? 180.0 : (against ? (dual ? 90.0 : 60.0) : 90.0);
+  const auto ego0 = static_cast<double>(ego_s[0]);
+  std::vector<double> starts;
+  const double from = own ? ego0 + rng.uniform(15.0, 40.0) : (against ? 0.0 : std::max(0.0, ego0 - 300.0));
+  for (double s = from; s < length - 10.0; s += rng.exponential(mean_gap) + 15.0) {
+    starts.push_back(s);
+  }
+  std::vector<double> behind;
+  if (own) {
+    for (int k = rng.uniform_int(0, 2), b = 1; b <= k; ++b) {
+      behind.push_back(ego0 - 12.0 * b - rng.uniform(0.0, 10.0));
     }
   }
+  auto make = [&](double s0, double speed_lo, double speed_hi) {
+    TrafficVehicle v = draw_vehicle(rng, li, dual ? 0.25 : 0.1);
+    Motion m;
+    m.cruise = rng.uniform(speed_lo, speed_hi) * plan.cruise_speed;
+    for (const Stop& st : junctions) {
+      if (rng.bernoulli(0.5)) {
+        m.stops.push_back(Stop{st.s, rng.uniform(2.0, 8.0)});
+      }
+    }
+    v.s = drive_alone(s0, m, cap, ego_s.size());
+    return v;
+  };
+  // Each vehicle is kept behind the one in front of it; in the car's own lane the car itself is
+  // the reference: the vehicles ahead are kept ahead of it, the followers behind.
+  auto chain = [&](const std::vector<double>& at, double lo, double hi, double tau_lo, bool ahead, bool from_ego) {
+    const std::size_t first = vehicles_.size();
+    for (double s0 : at) {
+      TrafficVehicle v = make(s0, lo, hi);
+      const bool has_prev = vehicles_.size() > first;
+      if (has_prev || from_ego) {
+        const std::vector<float>& prev = has_prev ? vehicles_.back().s : ego_s;
+        const double half = has_prev ? vehicles_.back().half_length : kEgoHalfLength;
+        keep_gap(v.s, prev, half + v.half_length + kStandingGap, rng.uniform(tau_lo, 2.0), ahead);
+      }
+      vehicles_.push_back(std::move(v));
+    }
+  };
+  if (own) {
+    chain(starts, 0.85, 1.15, 1.0, true, true);  // ahead of the car, nearest first
+    chain(behind, 1.0, 1.2, 1.2, false, true);
+  } else {
+    std::reverse(starts.begin(), starts.end());  // front first
+    chain(starts, against ? 0.65 : 0.8, against ? 1.05 : 1.3, 1.0, false, false);
+  }
+}
 
+void Traffic::leave_out_touching(const Trajectory& ego, double duration) {
   // Leave out every vehicle that would ever touch the car (lane changes, a route that drives a
   // street again the other way, crossings): a stand-in for the traffic rules.
   std::vector<TrafficVehicle> kept;

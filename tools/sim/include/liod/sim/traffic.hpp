@@ -62,6 +62,9 @@ class Traffic {
     std::vector<Eigen::Vector2d> points;  // 1 m apart
   };
   Eigen::Vector2d lane_point(const Lane& lane, double s) const;
+  std::size_t build_lanes(const DrivePlan& plan);
+  void populate(std::uint32_t lane, bool against, const DrivePlan& plan, const std::vector<float>& ego_s, Rng& rng);
+  void leave_out_touching(const Trajectory& ego, double duration);
 
   Terrain terrain_;
   std::vector<Lane> lanes_;
