@@ -250,7 +250,9 @@ void Traffic::populate(std::uint32_t li, bool against, const DrivePlan& plan, co
     }
   };
   if (own) {
-    chain(starts, 0.85, 1.15, 1.0, true, true);  // ahead of the car, nearest first
+    // Ahead of the car, nearest first, at least as fast as it would like to go: a slower one
+    // would end up pinned to its bumper, moving with it, which the gap rule only allows at stops.
+    chain(starts, 1.0, 1.2, 1.0, true, true);
     chain(behind, 1.0, 1.2, 1.2, false, true);
   } else {
     std::reverse(starts.begin(), starts.end());  // front first
