@@ -11,6 +11,7 @@ namespace liod::sim {
 
 namespace {
 constexpr std::uint64_t kDriveStream = 0x6472697665ULL;
+constexpr std::uint64_t kVibrationStream = 0x7669627261ULL;
 constexpr double kKnot = 0.01;    // s between spline control points
 constexpr double kStep = 0.001;   // s, driver and suspension integration step
 constexpr double kProfileDs = 0.5;
@@ -228,6 +229,21 @@ Trajectory generate_drive(const DrivePlan& plan, const PathCurve& path, const Te
   for (int ch = 3; ch <= 5; ++ch) {
     const double w = 2 * std::numbers::pi * rng.uniform(14.0, 21.0);
     vib.push_back({ch, 0.004 / w, w / (2 * std::numbers::pi), rng.uniform(0, 6.28)});
+  }
+  if (veh.road_vibration > 0.0) {
+    // Each mode a narrow band: three sinusoids within +-10 % of its frequency whose beats make the
+    // shaking come and go; its RMS is that of one sinusoid of the band's amplitude.
+    Rng vr(derive_seed(seed, kVibrationStream));
+    auto band = [&](int channel, double hz, double amplitude) {
+      for (int k = 0; k < 3; ++k) {
+        vib.push_back({channel, veh.road_vibration * amplitude / std::sqrt(3.0), hz * vr.uniform(0.9, 1.1),
+                       vr.uniform(0.0, 2.0 * std::numbers::pi)});
+      }
+    };
+    band(2, 3.0, 0.004);    // body bounce
+    band(2, 11.0, 0.0004);  // wheel hop, through the suspension
+    band(4, 9.0, 0.0008);   // pitch shake
+    band(3, 11.0, 0.0004);  // roll shake, the wheels of an axle hopping out of phase
   }
   if (stats != nullptr) {
     *stats = st;

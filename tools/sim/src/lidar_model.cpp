@@ -175,12 +175,59 @@ bool LidarModel::measure(const RayHit& hit, bool ego, int channel, Rng& rng, Cha
   return true;
 }
 
-void LidarModel::fire(int az_step, const Pose& start, const Pose& next, const World& world,
-                      RayContext& ctx, FiringResult& out) const {
+void LidarModel::add_conditions(double ego_range, RayContext& ctx, ChannelReturn& first,
+                                ChannelReturn& second) const {
+  if (noise_.rain_rate > 0.0) {
+    // A drop in the beam near the lens returns a weak echo that, so close, is still the strongest
+    // (the 1/d^2 of the link budget); the drop's distance is that of the nearest drop met, i.e.
+    // exponential, and the detection falls off with range, hence the short mean.
+    const double p = noise_.rain_rate / (kChannels * kBlocksPerRev * kRevPerSecond);
+    const double u = ctx.aux().uniform();
+    const double range = 0.4 + ctx.aux().exponential(1.2);
+    const int intensity = ctx.aux().uniform_int(1, 6);
+    const bool in_front = first.raw == 0 || range < first.raw * kRangeUnit;
+    if (u < p && in_front && range < std::min(ego_range, 8.0)) {
+      first.raw = static_cast<std::uint16_t>(std::lround(range / kRangeUnit));
+      first.intensity = static_cast<std::uint8_t>(intensity);
+      if (!params_.dual_return) {
+        second = first;
+      }
+    }
+  }
+  if (noise_.extra_dropout > 0.0) {
+    if (first.raw != 0 && ctx.aux().uniform() < noise_.extra_dropout) {
+      first = ChannelReturn{};
+    }
+    if (!params_.dual_return) {
+      second = first;
+    } else if (second.raw != 0 && ctx.aux().uniform() < noise_.extra_dropout) {
+      second = ChannelReturn{};
+    }
+  }
+}
+
+void LidarModel::fire(int az_step, double t, const Pose& start, const Pose& next, const World& world,
+                      TrafficScratch* traffic, RayContext& ctx, FiringResult& out) const {
   out.azimuth = static_cast<std::uint16_t>(az_step * 20);
+  const bool moving = traffic != nullptr && traffic->traffic != nullptr;
+  if (moving) {
+    const Eigen::Vector3d mid = start.rotation * dir_[slot(az_step, 0)];
+    traffic->traffic->boxes_toward(traffic->near, t, start.translation.head<2>(), mid.head<2>().normalized(),
+                                   traffic->boxes);
+  }
+  const bool conditions = noise_.rain_rate > 0.0 || noise_.extra_dropout > 0.0;
   for (int c = 0; c < kChannels; ++c) {
     const auto i = static_cast<std::size_t>(c);
     const double alpha = kFiringOffsetUs[i] * 1e-6 / kBlockPeriod;
+    const double dt = kFiringOffsetUs[i] * 1e-6;
+    ctx.set_time(t + dt);
+    auto cast = [&](const Eigen::Vector3d& from, const Eigen::Vector3d& dir, double range, RayHit& hit) {
+      bool found = world.cast(from, dir, range, ctx, hit);
+      if (moving && !traffic->boxes.empty()) {
+        found = intersect_moving(traffic->boxes, dt, from, dir, found ? hit.range : range, ctx.rng(), hit) || found;
+      }
+      return found;
+    };
     // Over 55 us, linear interpolation of the pose is exact to nanometres.
     const Eigen::Matrix3d R = (1.0 - alpha) * start.rotation + alpha * next.rotation;
     const Eigen::Vector3d p = (1.0 - alpha) * start.translation + alpha * next.translation;
@@ -188,7 +235,7 @@ void LidarModel::fire(int az_step, const Pose& start, const Pose& next, const Wo
     const Eigen::Vector3d d = (R * dir_[slot(az_step, c)]).normalized();
     const double ego_t = ego_range_[slot(az_step, c)];
     RayHit hit;
-    const bool found = world.cast(o, d, std::min(params_.max_range + 1.0, ego_t), ctx, hit);
+    const bool found = cast(o, d, std::min(params_.max_range + 1.0, ego_t), hit);
     ChannelReturn first{};
     ChannelReturn second{};
     double s1 = 0.0;
@@ -206,7 +253,7 @@ void LidarModel::fire(int az_step, const Pose& start, const Pose& next, const Wo
         // A beam partly blocked by foliage also returns from what lies behind it.
         RayHit behind;
         const double t0 = hit.range + 0.5;
-        if (world.cast(o + d * t0, d, params_.max_range + 1.0 - t0, ctx, behind)) {
+        if (cast(o + d * t0, d, params_.max_range + 1.0 - t0, behind)) {
           behind.range += t0;
           ChannelReturn last{};
           double s2 = 0.0;
@@ -218,6 +265,9 @@ void LidarModel::fire(int az_step, const Pose& start, const Pose& next, const Wo
           }
         }
       }
+    }
+    if (conditions) {
+      add_conditions(ego_t, ctx, first, second);
     }
     out.first[i] = first;
     out.second[i] = second;

@@ -80,6 +80,22 @@ std::vector<Eigen::Vector2d> offset_polyline(const std::vector<Eigen::Vector2d>&
   return out;
 }
 
+std::vector<Eigen::Vector2d> resample_polyline(const std::vector<Eigen::Vector2d>& pts, double spacing) {
+  std::vector<Eigen::Vector2d> out{pts.front()};
+  double carry = 0.0;
+  for (std::size_t i = 1; i < pts.size(); ++i) {
+    const Eigen::Vector2d d = pts[i] - pts[i - 1];
+    const double len = d.norm();
+    double t = spacing - carry;
+    while (t <= len) {
+      out.push_back(pts[i - 1] + d * (t / len));
+      t += spacing;
+    }
+    carry = len - (t - spacing);
+  }
+  return out;
+}
+
 std::vector<double> polyline_arclength(const std::vector<Eigen::Vector2d>& pts) {
   std::vector<double> s(pts.size(), 0.0);
   for (std::size_t i = 1; i < pts.size(); ++i) {

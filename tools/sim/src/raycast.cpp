@@ -36,7 +36,16 @@ bool in_window(const Box& b, const Eigen::Vector3d& local, int axis) {
 
 bool World::hit_box(std::size_t i, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double best,
                     RayContext& ctx, RayHit& hit) const {
-  const Box& b = boxes[i];
+  if (wind_ && boxes[i].look.kind == SurfaceKind::Porous) {
+    Box moved = boxes[i];
+    moved.center.head<2>() += sway_at(static_cast<std::uint32_t>(i), ctx);
+    return intersect_box(moved, o, d, best, ctx.rng(), hit);
+  }
+  return intersect_box(boxes[i], o, d, best, ctx.rng(), hit);
+}
+
+bool intersect_box(const Box& b, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double best,
+                   Rng& rng, RayHit& hit) {
   const Eigen::Vector3d ol = b.rotation.transpose() * (o - b.center);
   const Eigen::Vector3d dl = b.rotation.transpose() * d;
   double tnear = -kInf;
@@ -65,12 +74,12 @@ bool World::hit_box(std::size_t i, const Eigen::Vector3d& o, const Eigen::Vector
     return false;
   }
   if (b.look.kind == SurfaceKind::Porous) {
-    const double t = std::max(tnear, 0.0) + ctx.rng().exponential(1.0 / static_cast<double>(b.look.extinction));
+    const double t = std::max(tnear, 0.0) + rng.exponential(1.0 / static_cast<double>(b.look.extinction));
     if (t >= tfar || t >= best) {
       return false;
     }
     hit.range = t;
-    hit.cos_incidence = random_foliage_cos(ctx.rng());
+    hit.cos_incidence = random_foliage_cos(rng);
     hit.reflectivity = b.look.reflectivity;
     hit.kind = SurfaceKind::Porous;
     return true;
@@ -139,7 +148,11 @@ bool World::hit_cylinder(std::size_t i, const Eigen::Vector3d& o, const Eigen::V
 bool World::hit_ellipsoid(std::size_t i, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
                           double best, RayContext& ctx, RayHit& hit) const {
   const Ellipsoid& e = ellipsoids[i];
-  const Eigen::Vector3d q = (o - e.center).cwiseQuotient(e.radii);
+  Eigen::Vector3d center = e.center;
+  if (wind_) {
+    center.head<2>() += sway_at(static_cast<std::uint32_t>(boxes.size() + cylinders.size() + i), ctx);
+  }
+  const Eigen::Vector3d q = (o - center).cwiseQuotient(e.radii);
   const Eigen::Vector3d s = d.cwiseQuotient(e.radii);
   const double a = s.squaredNorm();
   const double bh = q.dot(s);

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <ostream>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -205,14 +206,40 @@ void Simulation::write_yaml(const RunReport& report) const {
     << "  accel_scale_sigma: " << num(imu_noise_.accel_scale_sigma) << "\n"
     << "  misalignment_sigma_rad: " << num(imu_noise_.misalignment_sigma) << "\n"
     << "  initial_gyro_bias_rad_s: " << vec(probe.initial_gyro_bias()) << "\n"
-    << "  initial_accel_bias_mps2: " << vec(probe.initial_accel_bias()) << "\n"
-    << "outputs:\n"
+    << "  initial_accel_bias_mps2: " << vec(probe.initial_accel_bias()) << "\n";
+  if (config_.conditions.any()) {
+    write_conditions_yaml(s);
+  }
+  s << "outputs:\n"
     << "  msop_packets: " << report.msop_packets << "\n"
     << "  difop_packets: " << report.difop_packets << "\n"
     << "  lidar_returns: " << report.returns << "\n"
     << "  imu_samples: " << report.imu_samples << "\n";
   if (!s) {
     throw std::runtime_error("cannot write scenario.yaml in '" + config_.out_dir + "'");
+  }
+}
+
+void Simulation::write_conditions_yaml(std::ostream& s) const {
+  const RoadConditions& c = config_.conditions;
+  s << "conditions:  # added to the road (liod-sim --hard and its parts)\n"
+    << "  imu_part: " << (c.consumer_imu ? "Bosch BMI088 (data sheet BST-BMI088-DS001)" : "default MEMS unit") << "\n"
+    << "  road_vibration_scale: " << num(c.vibration_scale)
+    << "  # 1: body bounce 3 Hz 4 mm, wheel hop 11 Hz 0.4 mm, pitch 9 Hz 0.8 mrad, roll 11 Hz 0.4 mrad\n"
+    << "  random_dropout: " << num(c.dropout) << "\n"
+    << "  rain_returns_per_s: " << num(c.rain_rate) << "\n"
+    << "  wind: " << (c.wind ? "true" : "false") << "\n";
+  if (traffic_) {
+    s << "  traffic_vehicles: " << traffic_->size() << "\n";
+  }
+  if (open_stretch_) {
+    s << "  open_stretch:\n"
+      << "    enter_s: " << num(open_stretch_->t_begin) << "\n"
+      << "    leave_s: " << num(open_stretch_->t_end) << "\n"
+      << "    from_xy: [" << num(open_stretch_->path.front().x()) << ", " << num(open_stretch_->path.front().y()) << "]\n"
+      << "    to_xy: [" << num(open_stretch_->path.back().x()) << ", " << num(open_stretch_->path.back().y()) << "]\n"
+      << "    primitives_removed: " << open_stretch_->removed << "\n"
+      << "    hedge_boxes: " << open_stretch_->hedge << "\n";
   }
 }
 

@@ -279,6 +279,42 @@ bool SceneBuilder::add_pole(const Eigen::Vector2d& p, double height, double radi
   return true;
 }
 
+void vehicle_boxes(const Terrain& terrain, const Eigen::Vector2d& p, double yaw, double half_len,
+                   double half_wid, double top, const Appearance& paint, std::vector<Box>& out) {
+  const Eigen::Vector2d ax(std::cos(yaw), std::sin(yaw));
+  const Eigen::Vector2d ay(-ax.y(), ax.x());
+  auto h = [&](const Eigen::Vector2d& q) { return terrain.height(q.x(), q.y()); };
+  const double pitch = -std::atan2(h(p + ax * half_len) - h(p - ax * half_len), 2 * half_len);
+  const double roll = std::atan2(h(p + ay * half_wid) - h(p - ay * half_wid), 2 * half_wid);
+  const Eigen::Matrix3d R = rotation_from_euler(roll, pitch, yaw);
+  const double g = h(p);
+  Box body;
+  body.rotation = R;
+  body.look = paint;
+  if (top > 0.0) {
+    body.center << p.x(), p.y(), g + 0.5 * (0.45 + top);
+    body.half << half_len, half_wid, 0.5 * (top - 0.45);
+    out.push_back(body);
+    return;
+  }
+  body.center << p.x(), p.y(), g + 0.65;
+  body.half << half_len, half_wid, 0.35;
+  out.push_back(body);
+  Box cabin;
+  cabin.rotation = R;
+  cabin.look = Appearance{0.05F, SurfaceKind::Glass, 0.0F};
+  const Eigen::Vector2d cc = p - ax * 0.25;
+  cabin.center << cc.x(), cc.y(), g + 1.0 + 0.24;
+  cabin.half << half_len * 0.55, half_wid * 0.9, 0.24;
+  out.push_back(cabin);
+}
+
+Appearance vehicle_paint(Rng& rng) {
+  // Black and dark grey cars return little, white ones a lot.
+  const double paints[] = {0.04, 0.07, 0.12, 0.25, 0.45, 0.65};
+  return diffuse(paints[rng.uniform_int(0, 5)]);
+}
+
 bool SceneBuilder::add_car(const Eigen::Vector2d& p, double yaw, bool large, bool on_road) {
   const double hl = large ? rng_.uniform(3.0, 4.5) : rng_.uniform(2.0, 2.45);
   const double hw = large ? 1.2 : rng_.uniform(0.85, 0.95);
@@ -286,36 +322,9 @@ bool SceneBuilder::add_car(const Eigen::Vector2d& p, double yaw, bool large, boo
     return false;
   }
   reserve(p, yaw, hl, hw);
-  const Eigen::Vector2d ax(std::cos(yaw), std::sin(yaw));
-  const Eigen::Vector2d ay(-ax.y(), ax.x());
-  auto h = [&](const Eigen::Vector2d& q) { return world_.terrain.height(q.x(), q.y()); };
-  const double pitch = -std::atan2(h(p + ax * hl) - h(p - ax * hl), 2 * hl);
-  const double roll = std::atan2(h(p + ay * hw) - h(p - ay * hw), 2 * hw);
-  const Eigen::Matrix3d R = rotation_from_euler(roll, pitch, yaw);
-  const double g = h(p);
-  // Paint: black and dark grey cars return little, white ones a lot.
-  const double paints[] = {0.04, 0.07, 0.12, 0.25, 0.45, 0.65};
-  const Appearance paint = diffuse(paints[rng_.uniform_int(0, 5)]);
-  Box body;
-  body.rotation = R;
-  body.look = paint;
-  if (large) {
-    const double top = rng_.uniform(2.4, 3.4);
-    body.center << p.x(), p.y(), g + 0.5 * (0.45 + top);
-    body.half << hl, hw, 0.5 * (top - 0.45);
-    world_.boxes.push_back(body);
-    return true;
-  }
-  body.center << p.x(), p.y(), g + 0.65;
-  body.half << hl, hw, 0.35;
-  world_.boxes.push_back(body);
-  Box cabin;
-  cabin.rotation = R;
-  cabin.look = Appearance{0.05F, SurfaceKind::Glass, 0.0F};
-  const Eigen::Vector2d cc = p - ax * 0.25;
-  cabin.center << cc.x(), cc.y(), g + 1.0 + 0.24;
-  cabin.half << hl * 0.55, hw * 0.9, 0.24;
-  world_.boxes.push_back(cabin);
+  const Appearance paint = vehicle_paint(rng_);
+  const double top = large ? rng_.uniform(2.4, 3.4) : 0.0;
+  vehicle_boxes(world_.terrain, p, yaw, hl, hw, top, paint, world_.boxes);
   return true;
 }
 

@@ -291,6 +291,9 @@ DrivePlan plan_drive(const std::vector<Eigen::Vector2d>& corners, double cruise,
       offset_polyline(centre, std::vector<double>(centre.size(), 2.0));
   DrivePlan plan;
   plan.points = lane;
+  plan.road_centre = centre;
+  plan.lanes_with = {2.0};
+  plan.lanes_against = {2.0};
   plan.cruise_speed = cruise;
   plan.speed_cap.assign(lane.size(), cruise);
   const std::vector<double> s_lane = polyline_arclength(lane);
@@ -354,6 +357,7 @@ Scene make_city(const SceneRequest& req, Rng& rng, bool loop_route) {
     scene.plan = plan_drive(loop_route ? loop_corners(g, req, route) : walk_corners(g, req, route, true),
                             req.max_speed, loop_route, route);
   }
+  scene.plan.road_half_width = g.hw;
 
   // World extents and terrain.
   std::vector<Eigen::Vector2d> extent = {Eigen::Vector2d(g.xs.front(), g.ys.front()),

@@ -9,24 +9,6 @@
 
 namespace liod::sim::detail {
 
-namespace {
-std::vector<Eigen::Vector2d> resample(const std::vector<Eigen::Vector2d>& pts, double spacing) {
-  std::vector<Eigen::Vector2d> out{pts.front()};
-  double carry = 0.0;
-  for (std::size_t i = 1; i < pts.size(); ++i) {
-    const Eigen::Vector2d d = pts[i] - pts[i - 1];
-    const double len = d.norm();
-    double t = spacing - carry;
-    while (t <= len) {
-      out.push_back(pts[i - 1] + d * (t / len));
-      t += spacing;
-    }
-    carry = len - (t - spacing);
-  }
-  return out;
-}
-}  // namespace
-
 Scene make_figure8(const SceneRequest& req, Rng& rng) {
   Scene scene;
   // Lemniscate of Bernoulli: tightest radius a/3, so a >= v^2 keeps lateral acceleration <= 3.
@@ -40,7 +22,7 @@ Scene make_figure8(const SceneRequest& req, Rng& rng) {
     const double s2 = std::sin(t) * std::sin(t);
     fine.emplace_back(a * std::cos(t) / (1.0 + s2), a * std::sin(t) * std::cos(t) / (1.0 + s2));
   }
-  scene.plan.points = resample(fine, 1.0);
+  scene.plan.points = resample_polyline(fine, 1.0);
   scene.plan.cruise_speed = req.max_speed;
   scene.plan.speed_cap.assign(scene.plan.points.size(), req.max_speed);
 
@@ -57,7 +39,7 @@ Scene make_figure8(const SceneRequest& req, Rng& rng) {
     const double s2 = std::sin(t) * std::sin(t);
     lap.emplace_back(a * std::cos(t) / (1.0 + s2), a * std::sin(t) * std::cos(t) / (1.0 + s2));
   }
-  lap = resample(lap, 5.0);
+  lap = resample_polyline(lap, 5.0);
   for (std::size_t i = 1; i < lap.size(); ++i) {
     b.add_road(lap[i - 1], lap[i], 4.5);
   }

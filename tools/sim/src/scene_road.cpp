@@ -53,6 +53,10 @@ Scene make_highway(const SceneRequest& req, Rng& rng) {
   const std::vector<double> s_c = polyline_arclength(centre);
   const std::vector<double> off = lane_offsets(s_c, 7.6, 3.9, rng);
   scene.plan.points = offset_polyline(centre, off);
+  scene.plan.road_centre = centre;
+  scene.plan.road_half_width = 11.5;
+  scene.plan.lanes_with = {3.9, 7.6};
+  scene.plan.lanes_against = {3.9, 7.6};
   scene.plan.cruise_speed = req.max_speed;
   scene.plan.speed_cap.assign(scene.plan.points.size(), req.max_speed);
 
@@ -169,6 +173,10 @@ Scene make_tunnel(const SceneRequest& req, Rng& rng) {
   const int laps = static_cast<int>(std::ceil((req.max_speed * req.duration + 300.0) / lap_len));
   const std::vector<Eigen::Vector2d> centre = rounded_polyline(repeat_loop(lap, laps), rc, 1.0);
   scene.plan.points = offset_polyline(centre, std::vector<double>(centre.size(), 1.9));
+  scene.plan.road_centre = centre;
+  scene.plan.road_half_width = 5.0;
+  scene.plan.lanes_with = {1.9};
+  scene.plan.lanes_against = {1.9};
   scene.plan.cruise_speed = req.max_speed;
   scene.plan.speed_cap.assign(scene.plan.points.size(), req.max_speed);
 

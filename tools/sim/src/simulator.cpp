@@ -29,9 +29,24 @@ Simulation::Simulation(SimConfig config) : config_(std::move(config)) {
   }
   scene_ = generate_scene(req);
   vehicle_.roughness = scene_.road_roughness;
+  const RoadConditions& hard = config_.conditions;
+  vehicle_.road_vibration = hard.vibration_scale;
   const PathCurve path(scene_.plan.points, 2.5);
   trajectory_ = std::make_unique<Trajectory>(
       generate_drive(scene_.plan, path, scene_.world.terrain, vehicle_, req.duration, req.seed, &stats_));
+  // The added conditions draw from streams of their own, after everything else.
+  if (hard.open_stretch) {
+    open_stretch_ = clear_open_stretch(scene_, *trajectory_, req.duration, req.seed);
+  }
+  if (hard.wind) {
+    scene_.world.enable_wind(req.seed);
+  }
+  if (hard.open_stretch || hard.wind) {
+    scene_.world.rebuild();
+  }
+  if (hard.traffic) {
+    traffic_ = std::make_unique<Traffic>(scene_.plan, *trajectory_, scene_.world.terrain, req.duration, req.seed);
+  }
 
   // The LiDAR sits on a roof rack ~1 m above and ~0.5 m ahead of the IMU, mounted a few degrees
   // off from the IMU axes, and its clock runs a few ms behind the IMU's.
@@ -55,6 +70,11 @@ Simulation::Simulation(SimConfig config) : config_(std::move(config)) {
   lidar_params_.dual_return = config_.dual_return;
   lidar_noise_.enabled = config_.noise;
   lidar_noise_.angle_error_deg = config_.angle_error_deg;
+  lidar_noise_.extra_dropout = hard.dropout;
+  lidar_noise_.rain_rate = hard.rain_rate;
+  if (hard.consumer_imu) {
+    imu_noise_ = ImuNoise::bmi088();
+  }
   imu_noise_.enabled = config_.noise;
   ego_ = EgoBody::passenger_car();
   const HeliosCalibration cal = load_angles_csv(config_.angles_csv);
@@ -115,11 +135,21 @@ RunReport Simulation::write_lidar(const std::string& path,
         auto& out = results[static_cast<std::size_t>(k)];
         out.resize(static_cast<std::size_t>(g1 - g0));
         RayContext ctx(scene_.world, derive_seed(config_.scene.seed, kLidarStream, u));
-        Pose cur = lidar_pose(static_cast<double>(g0) * kBlockPeriod + time_offset_);
+        const double t0 = static_cast<double>(g0) * kBlockPeriod + time_offset_;
+        const double t1 = static_cast<double>(g1) * kBlockPeriod + time_offset_;
+        TrafficScratch traffic{traffic_.get(), {}, {}};
+        if (traffic_) {
+          // Range plus how far a vehicle and the car move in a revolution, plus a truck's half length.
+          traffic_->near(t0, t1, lidar_pose(0.5 * (t0 + t1)).translation.head<2>(),
+                         lidar_params_.max_range + 15.0, traffic.near);
+        }
+        Pose cur = lidar_pose(t0);
         for (std::uint64_t g = g0; g < g1; ++g) {
+          const double t = static_cast<double>(g) * kBlockPeriod + time_offset_;
           const Pose next = lidar_pose(static_cast<double>(g + 1) * kBlockPeriod + time_offset_);
           const int az = static_cast<int>((static_cast<std::uint64_t>(az_start_step_) + g) % kBlocksPerRev);
-          lidar_->fire(az, cur, next, scene_.world, ctx, out[static_cast<std::size_t>(g - g0)]);
+          lidar_->fire(az, t, cur, next, scene_.world, traffic_ ? &traffic : nullptr, ctx,
+                       out[static_cast<std::size_t>(g - g0)]);
           cur = next;
         }
         rays[static_cast<std::size_t>(k)] = (g1 - g0) * kChannels;

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "liod/sim/world.hpp"
@@ -19,10 +20,16 @@ float base_reflectivity(GroundType t) {
 }
 
 constexpr std::uint64_t kGroundStream = 0x67726F756E64ULL;
+constexpr std::uint64_t kAuxStream = 0x617578ULL;
 }  // namespace
 
 RayContext::RayContext(const World& world, std::uint64_t seed)
-    : stamp_(world.primitive_count(), 0U), rng_(seed) {}
+    : stamp_(world.primitive_count(), 0U), rng_(seed), aux_(derive_seed(seed, kAuxStream)) {
+  if (world.windy()) {
+    sway_time_.assign(world.primitive_count(), std::numeric_limits<double>::quiet_NaN());
+    sway_.assign(world.primitive_count(), Eigen::Vector2d::Zero());
+  }
+}
 
 void World::allocate(const Eigen::Vector2d& min, const Eigen::Vector2d& max, double cell_size) {
   cell_ = cell_size;
@@ -90,6 +97,8 @@ void World::index_primitive(std::uint32_t id, const Eigen::Vector2d& lo, const E
 }
 
 void World::finalize(std::uint64_t seed) {
+  seed_ = seed;
+  build_sway();
   const auto vx = static_cast<std::size_t>(nx_ + 1);
   const auto vy = static_cast<std::size_t>(ny_ + 1);
   heights_.resize(vx * vy);
@@ -113,19 +122,25 @@ void World::finalize(std::uint64_t seed) {
   cell_top_.assign(ncell, -1e9F);
   std::vector<std::vector<std::uint32_t>> lists(ncell);
   std::uint32_t id = 0;
+  // A swaying primitive is indexed over all the ground it can sweep.
+  auto reach = [&](std::uint32_t i) {
+    return Eigen::Vector2d::Constant(sway_.empty() ? 0.0 : kSwayReach * static_cast<double>(sway_[i].amplitude));
+  };
   for (const auto& b : boxes) {
     const Eigen::Matrix3d absr = b.rotation.cwiseAbs();
     const Eigen::Vector3d ext = absr * b.half;
-    index_primitive(id++, (b.center - ext).head<2>(), (b.center + ext).head<2>(),
+    index_primitive(id, (b.center - ext).head<2>() - reach(id), (b.center + ext).head<2>() + reach(id),
                     b.center.z() + ext.z(), lists);
+    ++id;
   }
   for (const auto& c : cylinders) {
     const Eigen::Vector2d r(c.radius, c.radius);
     index_primitive(id++, c.center - r, c.center + r, c.z1, lists);
   }
   for (const auto& e : ellipsoids) {
-    index_primitive(id++, (e.center - e.radii).head<2>(), (e.center + e.radii).head<2>(),
+    index_primitive(id, (e.center - e.radii).head<2>() - reach(id), (e.center + e.radii).head<2>() + reach(id),
                     e.center.z() + e.radii.z(), lists);
+    ++id;
   }
   cell_start_.assign(ncell + 1, 0U);
   for (std::size_t c = 0; c < ncell; ++c) {

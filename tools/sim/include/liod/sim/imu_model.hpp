@@ -29,6 +29,10 @@ struct ImuNoise {
   double gyro_scale_sigma = 3.0e-4;        // 300 ppm
   double accel_scale_sigma = 5.0e-4;
   double misalignment_sigma = 5.0e-4;      // rad (0.03 deg) cross-axis
+
+  /// A consumer-grade MEMS IMU, the Bosch BMI088 (liod-sim --imu-grade consumer), from its data
+  /// sheet (BST-BMI088-DS001); imu_model.cpp gives each figure and its conversion.
+  static ImuNoise bmi088();
 };
 
 struct ImuReading {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "liod/sim/rng.hpp"
+#include "liod/sim/traffic.hpp"
 #include "liod/sim/trajectory.hpp"
 #include "liod/sim/world.hpp"
 
@@ -45,6 +46,11 @@ struct LidarNoise {
   double channel_bias_sigma = 0.004;    // m, fixed per laser (residual calibration error)
   double angle_error_deg = 0.005;       // true angles differ from the published 0.01 deg table
   double random_dropout = 0.002;
+  // Added conditions (liod-sim --dropout, --rain), off by default: the fraction of returns lost
+  // at random (a dirty window, interference, packet loss) and spurious near returns from rain
+  // drops per second.
+  double extra_dropout = 0.0;
+  double rain_rate = 0.0;
 };
 
 struct LidarParams {
@@ -79,10 +85,11 @@ class LidarModel {
              const LidarNoise& noise, const Pose& imu_from_lidar, const EgoBody* ego,
              std::uint64_t seed);
 
-  /// One firing (block) at azimuth step `az_step` (0..1799): poses of the LiDAR in the world at
-  /// the block's start and at the next block's start, interpolated to each laser's firing time.
-  void fire(int az_step, const Pose& start, const Pose& next, const World& world,
-            RayContext& ctx, FiringResult& out) const;
+  /// One firing (block) at azimuth step `az_step` (0..1799) starting at IMU-clock time `t`:
+  /// poses of the LiDAR in the world at the block's start and at the next block's start,
+  /// interpolated to each laser's firing time. `traffic` (may be null): the vehicles around.
+  void fire(int az_step, double t, const Pose& start, const Pose& next, const World& world,
+            TrafficScratch* traffic, RayContext& ctx, FiringResult& out) const;
 
   const HeliosCalibration& published() const { return published_; }
   const HeliosCalibration& true_angles() const { return true_; }
@@ -104,6 +111,8 @@ class LidarModel {
   std::vector<Eigen::Vector3d> dir_;
   std::vector<float> ego_range_;
   float ego_reflectivity_ = 0.5F;
+
+  void add_conditions(double ego_range, RayContext& ctx, ChannelReturn& first, ChannelReturn& second) const;
 };
 
 }  // namespace liod::sim

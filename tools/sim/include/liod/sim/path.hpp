@@ -19,6 +19,14 @@ struct DrivePlan {
   std::vector<Stop> stops;              // sorted by s
   double static_start_s = 0.0;          // seconds at rest before moving off (0 = rolling start)
   double cruise_speed = 10.0;           // m/s wanted on a free road
+  // The road under the lane, for other traffic: its centre line at each point (empty: a road
+  // without lanes, e.g. the yard of figure8), the half width, and the centres of its lanes, in
+  // metres right of the centre line, in the drive's direction and in the opposite one (right of
+  // that direction).
+  std::vector<Eigen::Vector2d> road_centre;
+  double road_half_width = 0.0;
+  std::vector<double> lanes_with;
+  std::vector<double> lanes_against;
 };
 
 /// Dense polyline through `corners` with every interior corner replaced by a circular arc of the
@@ -29,6 +37,9 @@ std::vector<Eigen::Vector2d> rounded_polyline(const std::vector<Eigen::Vector2d>
 /// Shifts each point sideways by offset[i] (positive = to the right of the driving direction).
 std::vector<Eigen::Vector2d> offset_polyline(const std::vector<Eigen::Vector2d>& pts,
                                              const std::vector<double>& offset);
+
+/// Points `spacing` apart along a polyline (its last point is dropped unless it falls on one).
+std::vector<Eigen::Vector2d> resample_polyline(const std::vector<Eigen::Vector2d>& pts, double spacing);
 
 /// Cumulative length along a polyline.
 std::vector<double> polyline_arclength(const std::vector<Eigen::Vector2d>& pts);

@@ -63,4 +63,11 @@ class SceneBuilder {
 
 double facade_reflectivity(Rng& rng);
 
+/// The boxes of a road vehicle standing on the terrain at p, facing yaw: a car (top = 0) is a
+/// painted body with a glass cabin on it, a van or truck one painted box from 0.45 m up to `top`.
+void vehicle_boxes(const Terrain& terrain, const Eigen::Vector2d& p, double yaw, double half_len,
+                   double half_wid, double top, const Appearance& paint, std::vector<Box>& out);
+/// A vehicle's paint, from black to white.
+Appearance vehicle_paint(Rng& rng);
+
 }  // namespace liod::sim

@@ -4,14 +4,17 @@
 
 #include <cstdint>
 #include <functional>
+#include <iosfwd>
 #include <memory>
 #include <optional>
 #include <string>
 
+#include "liod/sim/conditions.hpp"
 #include "liod/sim/drive.hpp"
 #include "liod/sim/imu_model.hpp"
 #include "liod/sim/lidar_model.hpp"
 #include "liod/sim/scene.hpp"
+#include "liod/sim/traffic.hpp"
 #include "liod/sim/trajectory.hpp"
 
 namespace liod::sim {
@@ -36,6 +39,7 @@ struct SimConfig {
   std::optional<Eigen::Vector3d> extrinsic_rpy_deg;
   std::optional<Eigen::Vector3d> extrinsic_translation_m;
   std::optional<double> time_offset_s;
+  RoadConditions conditions;  // none by default
 };
 
 struct RunReport {
@@ -67,10 +71,15 @@ class Simulation {
   double time_offset() const { return time_offset_; }
   /// World pose of the LiDAR at IMU-clock time t (seconds after the run's start).
   Pose lidar_pose(double t) const;
+  /// The other vehicles (null without --traffic) and the open stretch (if asked for).
+  const Traffic* traffic() const { return traffic_.get(); }
+  const std::optional<OpenStretch>& open_stretch() const { return open_stretch_; }
+  const ImuNoise& imu_noise() const { return imu_noise_; }
 
  private:
   void write_imu_and_truth(RunReport& report) const;
   void write_yaml(const RunReport& report) const;
+  void write_conditions_yaml(std::ostream& s) const;
 
   SimConfig config_;
   Scene scene_;
@@ -85,6 +94,8 @@ class Simulation {
   LidarNoise lidar_noise_;
   ImuNoise imu_noise_;
   int az_start_step_ = 0;
+  std::unique_ptr<Traffic> traffic_;
+  std::optional<OpenStretch> open_stretch_;
 };
 
 /// "1700000012.345678901" from an integer epoch and a relative time, without double rounding.

@@ -3,6 +3,7 @@
 // a 2D uniform grid so a ray only meets what lies under its footprint.
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -62,18 +63,46 @@ struct RayHit {
 
 class World;
 
-/// Per-thread scratch for ray casting: the mailbox that tests each primitive once per ray and the
-/// random stream for porous media.
+/// Per-thread scratch for ray casting: the mailbox that tests each primitive once per ray, the
+/// random stream for porous media, and the time of the ray (where swaying foliage is).
 class RayContext {
  public:
   RayContext(const World& world, std::uint64_t seed);
   Rng& rng() { return rng_; }
+  /// The draws of the drive's added conditions (rain, random dropouts): a stream of its own, so
+  /// that switching them on leaves every other draw of the revolution as it was.
+  Rng& aux() { return aux_; }
+  /// IMU-clock time of the ray about to be cast.
+  void set_time(double t) { time_ = t; }
+  double time() const { return time_; }
 
  private:
   friend class World;
   std::vector<std::uint32_t> stamp_;
   std::uint32_t ray_id_ = 0;
   Rng rng_;
+  Rng aux_;
+  double time_ = 0.0;
+  // Wind: each porous primitive's displacement, recomputed when the time moves on.
+  std::vector<double> sway_time_;
+  std::vector<Eigen::Vector2d> sway_;
+};
+
+/// Ray against one box within (0, best): a porous box stops the beam at an exponentially
+/// distributed depth drawn from `rng`; façade windows are glass.
+bool intersect_box(const Box& b, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double best,
+                   Rng& rng, RayHit& hit);
+
+/// How porous vegetation moves in the wind (liod-sim --wind): every crown, bush and hedge leans
+/// with the gusts in the wind's direction and sways about that lean in a few random modes.
+struct SwayMode {
+  float frequency = 0.0F;  // Hz
+  float phase_x = 0.0F;
+  float phase_y = 0.0F;
+};
+struct Sway {
+  float amplitude = 0.0F;  // m, 0 = does not move
+  std::array<SwayMode, 3> modes{};
 };
 
 class World {
@@ -92,6 +121,13 @@ class World {
   GroundType ground_type_at(double x, double y) const;
   /// Samples the terrain on the grid and builds the primitive index. Call after adding primitives.
   void finalize(std::uint64_t seed);
+  /// finalize() again with the same seed, after primitives were added, removed or set swaying.
+  void rebuild() { finalize(seed_); }
+  /// Sets porous vegetation swaying in the wind (drawn from `seed`); takes effect at rebuild().
+  void enable_wind(std::uint64_t seed);
+  bool windy() const { return !sway_.empty(); }
+  /// Horizontal displacement at time t of primitive `id` (boxes, cylinders, ellipsoids in turn).
+  Eigen::Vector2d sway(std::uint32_t id, double t) const;
 
   /// Nearest surface along the ray within [0, max_range]; false when nothing is hit.
   bool cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double max_range,
@@ -139,6 +175,17 @@ class World {
   std::vector<std::uint32_t> cell_start_;
   std::vector<std::uint32_t> cell_items_;
   double max_z_ = 0.0;
+  std::uint64_t seed_ = 0;
+  std::uint64_t wind_seed_ = 0;
+  bool wind_ = false;
+  std::vector<Sway> sway_;              // per primitive id when windy, else empty
+  Eigen::Vector2d wind_dir_ = Eigen::Vector2d::UnitX();
+  double gust_frequency_ = 0.0;
+  double gust_phase_ = 0.0;
+  const Eigen::Vector2d& sway_at(std::uint32_t id, RayContext& ctx) const;
+  void build_sway();
+  // The farthest a primitive sways, in units of its amplitude: a full lean plus three modes.
+  static constexpr double kSwayReach = 2.8;
 };
 
 }  // namespace liod::sim
