@@ -60,11 +60,13 @@ bool KeyframeWindow::consider(const DeskewedFeatures& features, const NavState& 
 
 void KeyframeWindow::add(const DeskewedFeatures& features, const NavState& state,
                          std::vector<Eigen::Vector3d> similarity_cloud_world) {
-  // Only the newest keyframe's similarity cloud is read (the next candidate's Hausdorff test, the
-  // backend's copy): the window's older ones let theirs go.
+  // Only the newest keyframe's similarity cloud and IMU stretch are read (the next candidate's
+  // Hausdorff test, the backend's copy): the window's older ones let theirs go.
   if (!keyframes_.empty()) {
     keyframes_.back().similarity_cloud_world.clear();
     keyframes_.back().similarity_cloud_world.shrink_to_fit();
+    keyframes_.back().imu_since_previous.clear();
+    keyframes_.back().imu_since_previous.shrink_to_fit();
   }
   Keyframe kf;
   kf.id = next_id_++;

@@ -29,13 +29,9 @@ Eigen::Isometry3d pose_of(const liod::NavState& s) {
   return t;
 }
 
-std::vector<liod::ImuInterval> imu_between(const std::deque<liod::ImuSample>& samples, double from, double to) {
-  return liod::imu_intervals(samples, from, to);
-}
-
 liod::ImuGraphFactor imu_factor(const std::deque<liod::ImuSample>& samples, std::size_t from, const liod::ImuNoise& noise) {
   auto pre = std::make_shared<liod::ImuPreintegration>(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), noise);
-  for (const auto& iv : imu_between(samples, from * kKeyframeStep_s, (from + 1) * kKeyframeStep_s)) {
+  for (const auto& iv : liod::imu_intervals(samples, from * kKeyframeStep_s, (from + 1) * kKeyframeStep_s)) {
     pre->integrate(iv.gyro, iv.accel, iv.dt);
   }
   liod::ImuGraphFactor f;
@@ -91,12 +87,15 @@ TEST(ImuFactors, TransformTurnsVelocitiesAndGravityWithThePoses) {
     graph.set_motion(i, {analytic_state(i * kKeyframeStep_s).velocity, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()});
   }
   graph.add_imu_factor(imu_factor(samples, 0, liod::ImuNoise{}));
+  const Eigen::Matrix<double, 9, 1> before_move = graph.whitened_error(graph.imu_factors()[0]);
   Eigen::Isometry3d delta = Eigen::Isometry3d::Identity();
   delta.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.1, 0.2, 1.0).normalized()).toRotationMatrix();
   delta.translation() = Eigen::Vector3d(3.0, -2.0, 0.5);
   graph.transform(delta);
   EXPECT_LT((graph.motion(1).velocity - delta.linear() * analytic_state(kKeyframeStep_s).velocity).norm(), 1e-12);
   EXPECT_LT((graph.imu_factors()[0].gravity - delta.linear() * liod::test::kAnalyticGravity).norm(), 1e-12);
+  // The factor's residuals are those of the states before the move.
+  EXPECT_LT((graph.whitened_error(graph.imu_factors()[0]) - before_move).norm(), 1e-6 * (1.0 + before_move.norm()));
   // The moved states still satisfy the factor: a solve from them changes nothing.
   graph.add_node(graph.pose(1));  // a third node so that node 1 is free
   const Eigen::Isometry3d before = graph.pose(1);
@@ -108,7 +107,7 @@ liod::Keyframe keyframe(std::uint64_t id, const std::deque<liod::ImuSample>& sam
   liod::Keyframe k;
   k.id = id;
   k.state = analytic_state(id * kKeyframeStep_s);
-  if (id > 0) k.imu_since_previous = imu_between(samples, imu_from, k.state.time);
+  if (id > 0) k.imu_since_previous = liod::imu_intervals(samples, imu_from, k.state.time);
   return k;
 }
 

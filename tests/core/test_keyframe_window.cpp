@@ -111,7 +111,7 @@ TEST(KeyframeWindow, HausdorffGateRejectsTheSameSceneAndAcceptsADifferentOne) {
 }
 
 // With room for three, the fourth keyframe pushes out the first, and the first's points leave
-// every map; only the newest keyframe keeps its similarity cloud.
+// every map; only the newest keyframe keeps its similarity cloud and IMU stretch.
 TEST(KeyframeWindow, TheWindowEvictsTheOldestKeyframeAndItsPoints) {
   KeyframeWindowConfig config = distance_angle_config();
   config.window_keyframes = 3;
@@ -124,6 +124,7 @@ TEST(KeyframeWindow, TheWindowEvictsTheOldestKeyframeAndItsPoints) {
     edges.emplace_back(10.0 * k + 1.25, 4.25, 2.75);
     const NavState state = pose({10.0 * k + 4.0, 0.0, 0.0});
     ASSERT_TRUE(window.consider(seen_from(state, roads.back(), {edges.back()}), state, hausdorff));
+    window.set_newest_for_backend(PoseCovariance::Identity(), std::vector<ImuInterval>(3));
     if (k == 2) {
       EXPECT_EQ(window.plane_map().size(), 3 * roads[0].size());
     }
@@ -141,6 +142,9 @@ TEST(KeyframeWindow, TheWindowEvictsTheOldestKeyframeAndItsPoints) {
   EXPECT_TRUE(window.keyframes()[0].similarity_cloud_world.empty());
   EXPECT_TRUE(window.keyframes()[1].similarity_cloud_world.empty());
   EXPECT_FALSE(window.keyframes()[2].similarity_cloud_world.empty());
+  EXPECT_TRUE(window.keyframes()[1].imu_since_previous.empty()) << "sent to the backend with its keyframe";
+  EXPECT_EQ(window.keyframes()[2].imu_since_previous.size(), 3U);
+  EXPECT_EQ(window.keyframes()[1].pose_covariance, PoseCovariance::Identity());
   EXPECT_FALSE(window.keyframes()[2].planes_world.empty()) << "the map points stay with every keyframe";
 }
 

@@ -45,11 +45,14 @@ Eigen::Isometry3d interpolate(const Eigen::Isometry3d& a, const Eigen::Isometry3
   return out;
 }
 
-// The graph's world frame differs from the odometry's by the correction at the node: its velocity
-// and gravity turn with it.
+// The graph's world frame differs from the odometry's by the correction at the node: a vector of
+// the odometry's world (velocity, gravity) turns by this into the graph's.
+Eigen::Matrix3d graph_from_odometry(const NavState& odometry, const Eigen::Isometry3d& graph_pose) {
+  return graph_pose.linear() * odometry.rotation.transpose();
+}
+
 NodeMotion motion_in_graph(const NavState& odometry, const Eigen::Isometry3d& graph_pose) {
-  const Eigen::Matrix3d turn = graph_pose.linear() * odometry.rotation.transpose();
-  return {turn * odometry.velocity, odometry.gyro_bias, odometry.accel_bias};
+  return {graph_from_odometry(odometry, graph_pose) * odometry.velocity, odometry.gyro_bias, odometry.accel_bias};
 }
 
 // Whether the intervals measure exactly [from, to]: the front end's stretch since the previous
@@ -147,7 +150,7 @@ void Backend::add_imu_factor(std::size_t previous, const Keyframe& keyframe) {
   ImuGraphFactor f;
   f.from = previous;
   f.to = previous + 1;
-  f.gravity = graph_.pose(f.to).linear() * keyframe.state.rotation.transpose() * keyframe.state.gravity;
+  f.gravity = graph_from_odometry(keyframe.state, graph_.pose(f.to)) * keyframe.state.gravity;
   f.gyro_bias_walk_sigma = config_.imu.gyro_bias_random_walk * std::sqrt(dt);
   f.accel_bias_walk_sigma = config_.imu.accel_bias_random_walk * std::sqrt(dt);
   f.preintegration = std::move(preintegration);
