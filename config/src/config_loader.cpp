@@ -61,6 +61,7 @@ void declare_front_end(Schema& s, FrontEndConfig& c) {
   s.real("odometry.map_voxel_m", &o.map_voxel_m, 0.1, 10.0);
   s.integer("odometry.map_points_per_voxel", &o.map_points_per_voxel, 1, kMapMaxPointsPerVoxel);
   s.real("odometry.map_min_point_spacing_m", &o.map_min_point_spacing_m, 0.0, 5.0);
+  s.integer("odometry.map_min_observations", &o.map_min_observations, 1, 10);
 }
 
 // The front end's registration, keyframes, holds and priors.

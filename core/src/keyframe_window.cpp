@@ -30,7 +30,8 @@ KeyframeWindow::KeyframeWindow(const KeyframeWindowConfig& config)
     : config_(config), plane_map_(empty_map()), edge_map_(empty_map()), post_axis_map_(empty_map()) {}
 
 LocalMap KeyframeWindow::empty_map() const {
-  return LocalMap(config_.map_voxel_m, config_.map_points_per_voxel, config_.map_min_point_spacing_m);
+  return LocalMap(config_.map_voxel_m, config_.map_points_per_voxel, config_.map_min_point_spacing_m,
+                  config_.map_min_observations);
 }
 
 void KeyframeWindow::restart() {

@@ -21,10 +21,11 @@ inline float squared_norm(float a, float b, float c) { return a * a + (b * b + c
 
 }  // namespace
 
-LocalMap::LocalMap(double voxel_size, int max_points_per_voxel, double min_point_spacing)
+LocalMap::LocalMap(double voxel_size, int max_points_per_voxel, double min_point_spacing, int min_observations)
     : inverse_voxel_size_(1.0 / voxel_size),
       max_points_per_voxel_(static_cast<std::uint32_t>(std::clamp(max_points_per_voxel, 1, kMaxPointsPerVoxel))),
       min_spacing_squared_(static_cast<float>(min_point_spacing * min_point_spacing)),
+      min_observations_(static_cast<std::uint32_t>(std::max(min_observations, 1))),
       slots_(1024) {}
 
 std::int32_t LocalMap::find_index(const VoxelKey& key) const {
@@ -39,6 +40,12 @@ std::int32_t LocalMap::find_index(const VoxelKey& key) const {
 const LocalMap::Voxel* LocalMap::find(const VoxelKey& key) const {
   const std::int32_t v = find_index(key);
   return v < 0 ? nullptr : &voxels_[static_cast<std::size_t>(v)];
+}
+
+const LocalMap::Voxel* LocalMap::find_observed(const VoxelKey& key) const {
+  const Voxel* voxel = find(key);
+  const std::uint32_t needed = keyframes_added_ > 1 ? min_observations_ : 1U;
+  return voxel != nullptr && voxel->observations >= needed ? voxel : nullptr;
 }
 
 LocalMap::Voxel& LocalMap::find_or_insert(const VoxelKey& key) {
@@ -65,6 +72,7 @@ LocalMap::Voxel& LocalMap::find_or_insert(const VoxelKey& key) {
       }
       Voxel& voxel = voxels_[static_cast<std::size_t>(index)];
       voxel.count = 0;
+      voxel.observations = 0;
       if (reusable != slots_.size()) {
         slots_[reusable] = {key, index};
       } else {
@@ -105,8 +113,13 @@ void LocalMap::rehash(std::size_t capacity) {
 
 void LocalMap::add(const std::vector<Eigen::Vector3d>& points, std::uint64_t keyframe_id) {
   const auto tag = static_cast<std::uint32_t>(keyframe_id);
+  ++keyframes_added_;
   for (const auto& p : points) {
     Voxel& voxel = find_or_insert(voxel_of(p, inverse_voxel_size_));
+    if (voxel.observations == 0 || voxel.last_observer != tag) {
+      ++voxel.observations;
+      voxel.last_observer = tag;
+    }
     if (voxel.count >= max_points_per_voxel_) continue;
     const Eigen::Vector3f pf = p.cast<float>();
     bool crowded = false;
@@ -203,7 +216,7 @@ void LocalMap::NeighbourSearch::prefetch_block(const VoxelKey& own, const VoxelK
 void LocalMap::NeighbourSearch::visit(int offset, const VoxelKey& key, const Eigen::Vector3f& query,
                                       Nearest& nearest) {
   if (!(looked_up_ >> offset & 1U)) {
-    voxels_[static_cast<std::size_t>(offset)] = map_->find(key);
+    voxels_[static_cast<std::size_t>(offset)] = map_->find_observed(key);
     looked_up_ |= 1U << offset;
   }
   const Voxel* voxel = voxels_[static_cast<std::size_t>(offset)];

@@ -112,6 +112,7 @@ KeyframeWindowConfig keyframe_window_config(const OdometryConfig& o, const Updat
   k.map_voxel_m = o.map_voxel_m;
   k.map_points_per_voxel = o.map_points_per_voxel;
   k.map_min_point_spacing_m = o.map_min_point_spacing_m;
+  k.map_min_observations = o.map_min_observations;
   if (update.posts) {
     k.post_viewpoint_body = update.edge_viewpoint_body;
     k.post_depth_m = update.posts->depth_m;

@@ -6,18 +6,21 @@
 # liod-eval. Prints one row per seed (ATE RMSE, KITTI drift, front-end ms per scan) and the median
 # and largest. Seeds 1-10 are the tuning set, 101-110 the held-out set that no tuning may use.
 #   scripts/hard/run.sh [--route urban|highway] [--duration 90] [--max-speed 15]
-#                       [--conditions "--hard"] OUT_DIR SEED...       (after building liod, liod-sim, liod-eval)
+#                       [--conditions "--hard"] [--config FILE] OUT_DIR SEED...
+#                       (after building liod, liod-sim, liod-eval)
 # --conditions replaces --hard by other liod-sim options (e.g. "--traffic": that condition alone;
-# "" none). Drives already simulated in OUT_DIR with the same options are reused. Each step runs
-# under flock /tmp/liod-build.lock when flock exists (the build machines share their cores).
+# "" none). --config layers FILE over the default configuration and names that replay's files after
+# it (odometry-NAME.tum for NAME.yaml), so that variants share the drives. Drives already simulated
+# in OUT_DIR with the same options are reused. Each step runs under flock /tmp/liod-build.lock when flock exists (the build machines share their cores).
 set -euo pipefail
-route=urban duration=90 speed=15 conditions="--hard"
+route=urban duration=90 speed=15 conditions="--hard" extra=() tag=odometry
 while [ $# -gt 0 ]; do
   case "$1" in
     --route) route=$2; shift 2 ;;
     --duration) duration=$2; shift 2 ;;
     --max-speed) speed=$2; shift 2 ;;
     --conditions) conditions=$2; shift 2 ;;
+    --config) extra=(--config "$(realpath "$2")"); tag="odometry-$(basename "$2" .yaml)"; shift 2 ;;
     -*) echo "run.sh: unknown option $1" >&2; exit 2 ;;
     *) break ;;
   esac
@@ -28,7 +31,7 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 bin=${LIOD_BIN:-$root/build/bin}
 lock=(); command -v flock >/dev/null && lock=(flock /tmp/liod-build.lock)
 mkdir -p "$out"
-rows="$out/rows.txt"; : > "$rows"
+rows="$out/rows-$tag.txt"; : > "$rows"
 printf '| seed | ATE RMSE (m) | KITTI drift (%%) | front end median (ms/scan) |\n|---|---|---|---|\n'
 for s in "$@"; do
   d="$out/${route}_s$s"; mkdir -p "$d"
@@ -40,10 +43,10 @@ for s in "$@"; do
   fi
   "${lock[@]}" "$bin/liod" --log-level warn replay --no-progress --config "$root/config/liod.yaml" \
     --config "$root/config/vehicles/liod-sim-car.yaml" --config "$d/extrinsics.yaml" \
-    --pcap "$d/lidar.pcap" --imu "$d/imu.csv" --trajectory "$d/odometry.tum" > "$d/replay.txt" 2>&1 || true
-  ms=$(grep -o 'median [0-9.]* ms' "$d/replay.txt" | head -1 | awk '{print $2}')
-  "$bin/liod-eval" --gt "$d/groundtruth.tum" --est "$d/odometry.tum" --json > "$d/eval.json" 2>/dev/null || true
-  python3 - "$d/eval.json" "$s" "${ms:-n/a}" "$rows" <<'PY'
+    "${extra[@]}" --pcap "$d/lidar.pcap" --imu "$d/imu.csv" --trajectory "$d/$tag.tum" > "$d/$tag-replay.txt" 2>&1 || true
+  ms=$(grep -o 'median [0-9.]* ms' "$d/$tag-replay.txt" | head -1 | awk '{print $2}')
+  "$bin/liod-eval" --gt "$d/groundtruth.tum" --est "$d/$tag.tum" --json > "$d/$tag-eval.json" 2>/dev/null || true
+  python3 - "$d/$tag-eval.json" "$s" "${ms:-n/a}" "$rows" <<'PY'
 import json, sys
 path, seed, ms, rows = sys.argv[1:5]
 try:

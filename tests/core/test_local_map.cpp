@@ -139,3 +139,43 @@ TEST(LocalMap, SurvivesManyInsertionsAndRemovalsOfKeyframes) {
   for (const auto& p : window.back()) hits += map.nearest(p, 1, 0.11, nn);
   EXPECT_EQ(hits, static_cast<int>(window.back().size()));
 }
+
+// A wall seen from three keyframes and a vehicle's back face that moved 1.5 m between them (as one
+// pacing the car does): with min_observations 2 the wall answers queries and the vehicle's trail
+// does not; a map of one keyframe answers from everything.
+TEST(LocalMap, VoxelsSeenByOneKeyframeOnlyAreNotMatched) {
+  auto face = [](double x) {  // a 2 m x 1.4 m face across the track at x, 10 cm grid
+    std::vector<Eigen::Vector3d> pts;
+    for (double y = 3.0; y <= 5.0; y += 0.1) {
+      for (double z = 0.2; z <= 1.6; z += 0.1) pts.emplace_back(x, y, z);
+    }
+    return pts;
+  };
+  auto wall = [](std::uint64_t k) {  // a wall along the track, its points shifted a little per keyframe
+    std::vector<Eigen::Vector3d> pts;
+    for (double x = 0.0; x <= 20.0; x += 0.25) {
+      for (double z = 0.0; z <= 2.0; z += 0.25) pts.emplace_back(x + 0.05 * static_cast<double>(k), -4.0, z);
+    }
+    return pts;
+  };
+  std::array<Eigen::Vector3d, liod::LocalMap::kMaxNeighbours> nn;
+  liod::LocalMap map(1.0, 20, 0.2, 2);
+  std::vector<Eigen::Vector3d> first = wall(0);
+  const auto back0 = face(10.3);
+  first.insert(first.end(), back0.begin(), back0.end());
+  map.add(first, 0);
+  EXPECT_EQ(map.nearest({10.3, 4.0, 1.0}, 5, 1.0, nn), 5) << "a map of one keyframe answers from all of it";
+  for (std::uint64_t k = 1; k <= 2; ++k) {
+    std::vector<Eigen::Vector3d> pts = wall(k);
+    const auto back = face(10.3 + 1.5 * static_cast<double>(k));
+    pts.insert(pts.end(), back.begin(), back.end());
+    map.add(pts, k);
+  }
+  EXPECT_EQ(map.nearest({5.1, -4.0, 1.1}, 5, 1.0, nn), 5) << "the wall, seen three times";
+  for (double x : {10.3, 11.8, 13.3}) {
+    EXPECT_EQ(map.nearest({x, 4.0, 1.0}, 5, 0.4, nn), 0) << "the vehicle's face at x = " << x;
+  }
+  liod::LocalMap all(1.0, 20, 0.2, 1);
+  for (std::uint64_t k = 0; k <= 2; ++k) all.add(face(10.3 + 1.5 * static_cast<double>(k)), k);
+  EXPECT_EQ(all.nearest({11.8, 4.0, 1.0}, 5, 0.4, nn), 5) << "min_observations 1 matches every voxel";
+}

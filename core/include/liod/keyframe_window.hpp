@@ -31,6 +31,7 @@ struct KeyframeWindowConfig {
   double map_voxel_m = 1.0;
   int map_points_per_voxel = 20;
   double map_min_point_spacing_m = 0.2;
+  int map_min_observations = 1;  // LocalMap's: keyframes that must have seen a voxel before it is matched
   /// With posts: the LiDAR's origin in the body frame and how far behind an edge its post's axis
   /// lies (post_axes); none: no post map.
   std::optional<Eigen::Vector3d> post_viewpoint_body;

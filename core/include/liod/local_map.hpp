@@ -4,6 +4,13 @@
 // keyframe so that the oldest keyframe's points leave the map when it leaves the window.
 // The hash is open-addressed (linear probing) over a pool of fixed-capacity voxels: a query's
 // 27 look-ups touch a few cache lines instead of chasing a node-based map's pointers.
+//
+// Moving objects: each voxel counts the keyframes that saw something in it, and a query uses only
+// voxels seen by at least min_observations of them. A static surface is seen again from the next
+// keyframe, keyframe_distance_m on; a vehicle that moved a voxel or more between two keyframes
+// (one pacing the car moves as far as the car) leaves a trail of voxels each seen once, and the
+// trail would otherwise hold the registration where the scene says little along the track
+// (docs/design.md, "Moving objects"). A map of a single keyframe uses everything it has.
 
 #include <Eigen/Core>
 #include <array>
@@ -22,11 +29,13 @@ class LocalMap {
   static constexpr int kMaxNeighbours = kMapMaxNeighbours;
   static constexpr int kMaxPointsPerVoxel = kMapMaxPointsPerVoxel;
 
-  /// max_points_per_voxel is capped at kMaxPointsPerVoxel.
-  LocalMap(double voxel_size, int max_points_per_voxel, double min_point_spacing);
+  /// max_points_per_voxel is capped at kMaxPointsPerVoxel; min_observations: the keyframes that
+  /// must have seen a voxel before queries use it (1: every voxel).
+  LocalMap(double voxel_size, int max_points_per_voxel, double min_point_spacing, int min_observations = 1);
 
   /// Adds world-frame points of one keyframe, keeping at most max_points_per_voxel per voxel and
-  /// no two points closer than min_point_spacing.
+  /// no two points closer than min_point_spacing. Every voxel a point falls in counts the
+  /// keyframe as an observation, also where the point itself is not kept.
   void add(const std::vector<Eigen::Vector3d>& points, std::uint64_t keyframe_id);
   /// Removes every point that came from this keyframe (`points` are the ones it added).
   void remove_keyframe(const std::vector<Eigen::Vector3d>& points, std::uint64_t keyframe_id);
@@ -95,6 +104,8 @@ class LocalMap {
       std::array<float, kBlock> z{};
     };
     std::uint32_t count = 0;
+    std::uint32_t observations = 0;    // keyframes that saw this voxel
+    std::uint32_t last_observer = 0;   // the newest of them (its id's low bits)
     std::array<Block, kMaxPointsPerVoxel / kBlock> blocks{};
     std::array<std::uint32_t, kMaxPointsPerVoxel> keyframes{};
     Eigen::Vector3f point(std::uint32_t i) const {
@@ -119,6 +130,8 @@ class LocalMap {
   std::size_t slot_of(const VoxelKey& key) const { return VoxelKeyHash{}(key) & (slots_.size() - 1); }
   std::int32_t find_index(const VoxelKey& key) const;
   const Voxel* find(const VoxelKey& key) const;
+  /// find(), but null for a voxel seen by too few keyframes to be used.
+  const Voxel* find_observed(const VoxelKey& key) const;
   Voxel& find_or_insert(const VoxelKey& key);
   void erase(const VoxelKey& key);
   void rehash(std::size_t capacity);
@@ -126,6 +139,8 @@ class LocalMap {
   double inverse_voxel_size_;
   std::uint32_t max_points_per_voxel_;
   float min_spacing_squared_;
+  std::uint32_t min_observations_;
+  std::uint32_t keyframes_added_ = 0;
   std::size_t point_count_ = 0;
   std::vector<Slot> slots_;
   std::vector<Voxel> voxels_;
