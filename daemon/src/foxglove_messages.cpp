@@ -226,7 +226,7 @@ std::vector<Eigen::Vector3f> view_points(const ViewScan& view, const ExtrinsicsC
   world.reserve(scan.points.size());
   for (const auto& p : scan.points) {
     if (!std::isfinite(p.x) || (p.x == 0.0F && p.y == 0.0F && p.z == 0.0F)) continue;
-    const Eigen::Vector3d body = lidar_to_imu * Eigen::Vector3d(p.x, p.y, p.z);
+    const Eigen::Vector3d body = lidar_to_imu * Eigen::Vector3f(p.x, p.y, p.z).cast<double>();
     world.push_back(world_from_end * (relative.at(t0 + static_cast<double>(p.time)) * body));
   }
   if (voxel_m > 0.0) world = voxel_downsample(world, voxel_m);
