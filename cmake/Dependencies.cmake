@@ -14,6 +14,9 @@ find_package(BZip2 REQUIRED)
 find_package(ZLIB REQUIRED)
 pkg_check_modules(LZ4 REQUIRED IMPORTED_TARGET liblz4)
 pkg_check_modules(ZSTD REQUIRED IMPORTED_TARGET libzstd)
+# The live view's WebSocket server (daemon/src/foxglove_server.cpp): Boost.Beast on Boost.Asio,
+# header-only; included by that one file.
+find_package(Boost 1.74 REQUIRED)
 if(LIOD_BUILD_TESTS)
   find_package(GTest REQUIRED)
   find_package(benchmark REQUIRED)

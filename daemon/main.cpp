@@ -91,6 +91,8 @@ void add_replay_command(CLI::App& app, Commands& c) {
   r.progress = true;
   c.replay->add_option("--pace", r.pace, "replay at this multiple of the recorded pace (1 = as recorded); default: as fast as possible, deterministic")->check(CLI::Range(0.0, 1000.0));
   c.replay->add_option("--pose-socket", r.pose_socket, "also serve the poses on this Unix socket (see docs/pose-protocol.md)");
+  c.replay->add_option("--foxglove", r.foxglove_port, "the live view: a Foxglove WebSocket server on this port (with --pace 1 to watch at the recorded pace)")
+      ->check(CLI::Range(1, 65535));
 }
 
 void add_offline_commands(CLI::App& app, Commands& c) {

@@ -64,6 +64,7 @@ sysroot_packages=(
   libspdlog-dev libfmt-dev libyaml-cpp-dev
   libgpiod-dev libsystemd-dev
   libbz2-dev liblz4-dev libzstd-dev zlib1g-dev
+  libboost-dev
   libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )

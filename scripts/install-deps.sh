@@ -12,6 +12,7 @@ packages=(
   libgpiod-dev libsystemd-dev
   libcli11-dev nlohmann-json3-dev
   libbz2-dev liblz4-dev libzstd-dev zlib1g-dev   # ROS 1 bag and MCAP chunks
+  libboost-dev   # Boost.Beast/Asio: the live view's WebSocket server
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-matplotlib   # liod-eval's plots (tools/eval/liod-eval-plot, run by /usr/bin/python3)
   clang

@@ -93,7 +93,8 @@ stage "libFuzzer"
 bash scripts/fuzz.sh 10 build-asan
 
 # ThreadSanitizer: the daemon's rings, pose socket and pipeline threads (ClockJump: the live
-# pipeline with IMU-rate poses made on the IMU thread).
+# pipeline with IMU-rate poses made on the IMU thread; Foxglove: the live view's io thread fed by
+# the pipeline's).
 stage "TSan build"
 configure_tree tsan build-tsan
 cmake --build build-tsan -j"$jobs" --target test_daemon
@@ -101,4 +102,4 @@ stage "TSan tests"
 seed_test_times build-tsan
 # The pipeline tests replay the drives the Release tests made (LIOD_TEST_DRIVES, as in the ASan tree).
 (cd build-tsan && export TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" LIOD_TEST_DRIVES="$PWD/../build" &&
-   ctest --output-on-failure -j"$jobs" -L test_daemon -R 'SpscRing|PoseSocket|PoseProtocol|StuckClient|UdpLidar|SerialImu|AnchorExchange|ClockJump')
+   ctest --output-on-failure -j"$jobs" -L test_daemon -R 'SpscRing|PoseSocket|PoseProtocol|StuckClient|UdpLidar|SerialImu|AnchorExchange|ClockJump|Foxglove')

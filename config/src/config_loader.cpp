@@ -212,6 +212,13 @@ void declare_daemon(Schema& s, DaemonConfig& c) {
   s.real("pose_socket.max_gyro_bias_rad_s", &c.pose_socket.max_gyro_bias_rad_s, 1e-4, 10.0);
   s.real("pose_socket.max_accel_bias_m_s2", &c.pose_socket.max_accel_bias_m_s2, 1e-3, 100.0);
   s.real("pose_socket.stale_after_s", &c.pose_socket.stale_after_s, 0.001, 3600.0);
+  s.integer("viewer.foxglove_port", &c.viewer.foxglove_port, 0, 65535);
+  s.text("viewer.bind_address", &c.viewer.bind_address);
+  s.integer("viewer.max_clients", &c.viewer.max_clients, 1, 256);
+  s.integer("viewer.client_queue_bytes", &c.viewer.client_queue_bytes, 65536, 1 << 30);
+  s.real("viewer.map_interval_s", &c.viewer.map_interval_s, 0.05, 3600.0);
+  s.real("viewer.map_voxel_m", &c.viewer.map_voxel_m, 0.05, 100.0);
+  s.real("viewer.scan_voxel_m", &c.viewer.scan_voxel_m, 0.0, 100.0);
 }
 
 Schema declare_schema(Config& c) {

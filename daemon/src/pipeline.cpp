@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "liod/daemon/extrinsics_check.hpp"
+#include "liod/daemon/foxglove_server.hpp"
 #include "liod/daemon/pose_server.hpp"
 
 namespace liod {
@@ -434,6 +435,9 @@ void Pipeline::process_scan(OdometryLoop& loop, ScanItem& item) {
   ev.process_start_ns = start_ns;
   ev.process_end_ns = steady_ns();
   push_pose(ev);
+  if (options_.viewer && options_.viewer->wants_scans()) {
+    options_.viewer->post_scan({std::make_shared<const Scan>(item.scan), result->state, ev.message.angular_rate});
+  }
   if (loop.imu_poses && !(result->status & kStatusSpeedUnknown)) {
     // IMU-rate poses are as (un)reliable as the scan they start from: while it is initialising
     // they are flagged so; before any speed is known (the first scan) there are none: dead
@@ -445,6 +449,11 @@ void Pipeline::process_scan(OdometryLoop& loop, ScanItem& item) {
   }
   if ((result->status & kStatusKeyframe) && !loop.odometry.keyframes().empty()) {
     KeyframeEvent k{std::make_shared<const Keyframe>(loop.odometry.keyframes().back()), steady_ns()};
+    if (options_.viewer) {
+      std::vector<std::uint64_t> window;
+      for (const Keyframe& w : loop.odometry.keyframes()) window.push_back(w.id);
+      options_.viewer->post_keyframe(k.keyframe, std::move(window));
+    }
     if (loop.lockstep) keyframe_ring_.push_wait(k, stop_);
     else keyframe_ring_.try_push(k);
   }
@@ -594,7 +603,9 @@ void Pipeline::publisher_thread(PoseServer* server) {
   const auto health_period = std::chrono::duration<double>(config_.pose_socket.health_interval_s);
   auto next_health = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(health_period);
   auto next_housekeeping = std::chrono::steady_clock::now();
-  HealthRates rates;
+  HealthRates rates, viewer_rates;
+  FoxgloveServer* viewer = options_.viewer.get();
+  auto next_viewer_health = std::chrono::steady_clock::now();
   while (!stop_.load(std::memory_order_relaxed)) {
     hb_publisher_.beat(steady_ns());
     fds.clear();
@@ -609,6 +620,7 @@ void Pipeline::publisher_thread(PoseServer* server) {
       for (const auto& sink : sinks_) sink(ev);
       const bool scan = ev.message.type == pose::MessageType::ScanPose;
       if (server != nullptr) server->broadcast(ev.message);
+      if (viewer != nullptr && scan) viewer->post_pose(ev.message);
       if (ev.input_steady_ns > 0) {
         const std::int64_t written = steady_ns();
         (scan ? scan_latency_ : imu_latency_).add(static_cast<double>(written - ev.input_steady_ns) * 1e-3);
@@ -632,6 +644,10 @@ void Pipeline::publisher_thread(PoseServer* server) {
     if (server != nullptr && now >= next_health) {
       server->broadcast_health(health_json(rates));
       next_health = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(health_period);
+    }
+    if (viewer != nullptr && now >= next_viewer_health) {
+      viewer->post_health(health_json(viewer_rates));
+      next_viewer_health = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(health_period);
     }
     if (pose_ring_.drained() && imu_pose_ring_.drained()) break;
   }
@@ -698,6 +714,16 @@ void Pipeline::backend_unit(const KeyframeEvent& k) {
   hb_backend_.begin_work(start);
   backend_->process(*k.keyframe);
   hb_backend_.end_work(steady_ns());
+  if (options_.viewer) {
+    // On the backend thread, between keyframes: the graph is not changing under this read.
+    const Backend& b = backend_->backend();
+    ViewGraph g;
+    for (const auto& pose : b.optimized_keyframe_poses()) g.keyframes.push_back(pose.translation());
+    for (const LoopCheck& c : b.loop_checks()) {
+      if (c.outcome == LoopOutcome::kAccepted) g.loops.emplace_back(c.current, c.candidate);
+    }
+    options_.viewer->post_graph(std::move(g));
+  }
 }
 
 std::vector<std::string> Pipeline::stalled(std::chrono::milliseconds max_age) const {

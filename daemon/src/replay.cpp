@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "liod/daemon/bag_sources.hpp"
+#include "liod/daemon/foxglove_server.hpp"
 #include "liod/daemon/kitti_sources.hpp"
 #include "liod/daemon/pipeline.hpp"
 #include "liod/daemon/sources.hpp"
@@ -245,6 +246,8 @@ int run_replay(const Config& given, const ReplayOptions& options, std::ostream& 
   po.imu_rate_poses = imu_rate != nullptr || (!options.pose_socket.empty() && config.pose_socket.imu_rate);
   po.pose_socket = options.pose_socket;
   po.realtime_threads = options.pace > 0.0;  // a bench replay as fast as possible needs no RT priorities
+  const int viewer_port = options.foxglove_port > 0 ? options.foxglove_port : config.viewer.foxglove_port;
+  if (viewer_port > 0) po.viewer = std::make_shared<FoxgloveServer>(config.viewer, config.extrinsics, static_cast<std::uint16_t>(viewer_port));
   Pipeline pipeline(config, po);
   // With the backend, the scan poses are kept and written corrected once the drive is over
   // (every loop known): the same file on every run, whatever the threads' timing.

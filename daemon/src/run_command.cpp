@@ -21,6 +21,7 @@
 #include <ostream>
 #include <thread>
 
+#include "liod/daemon/foxglove_server.hpp"
 #include "liod/daemon/pipeline.hpp"
 #include "liod/daemon/pose_client.hpp"
 #include "liod/daemon/sources.hpp"
@@ -345,6 +346,9 @@ int run_daemon(const Config& config, const RunOptions& options) {
   po.imu_rate_poses = config.pose_socket.imu_rate;
   po.pose_socket = config.output.pose_socket;
   po.bridge_clock_steps = true;
+  if (config.viewer.foxglove_port > 0) {
+    po.viewer = std::make_shared<FoxgloveServer>(config.viewer, config.extrinsics, static_cast<std::uint16_t>(config.viewer.foxglove_port));
+  }
   Pipeline pipeline(config, po);
   if (recorder) {
     Recorder* r = recorder.get();

@@ -10,7 +10,9 @@
 // With the backend on (--config config/examples/slam.yaml) it also shows what the backend costs
 // the odometry on the same cores: compare the odometry stage with a run without it, on a drive
 // that closes loops (e.g. liod-sim --route loop --duration 120).
-// Usage: bench_latency [--drive DIR] [--config FILE]...
+// With --viewers N, N Foxglove clients (foxglove_client.hpp) subscribe to every channel of the
+// live view for the whole drive: compare the scan latency with --viewers 0.
+// Usage: bench_latency [--drive DIR] [--config FILE]... [--viewers N]
 //   (default drive: a 30 s urban drive generated with liod-sim into /tmp)
 #include <algorithm>
 #include <atomic>
@@ -23,7 +25,9 @@
 
 #include <CLI/CLI.hpp>
 
+#include "foxglove_client.hpp"
 #include "udp_sender.hpp"
+#include "liod/daemon/foxglove_server.hpp"
 #include "liod/config.hpp"
 #include "liod/daemon/pipeline.hpp"
 #include "liod/daemon/pose_client.hpp"
@@ -58,6 +62,8 @@ int main(int argc, char** argv) {
   std::vector<std::string> extra_configs;
   app.add_option("--drive", drive, "liod-sim output directory (generated if absent)");
   app.add_option("--config", extra_configs, "config file layered after config/liod.yaml (repeatable)");
+  int viewers = 0;
+  app.add_option("--viewers", viewers, "Foxglove clients subscribed to every channel of the live view (0: the view off)");
   CLI11_PARSE(app, argc, argv);
   if (!std::filesystem::exists(drive / "lidar.pcap")) {
     std::filesystem::create_directories(drive);
@@ -96,6 +102,15 @@ int main(int argc, char** argv) {
   po.ordering = Ordering::Arrival;
   po.pose_socket = config.output.pose_socket;
   po.bridge_clock_steps = true;  // as liod run
+  std::vector<std::unique_ptr<test::FoxgloveClient>> clients;
+  if (viewers > 0) {
+    po.viewer = std::make_shared<FoxgloveServer>(config.viewer, config.extrinsics, 0);
+    for (int i = 0; i < viewers; ++i) {
+      clients.push_back(std::make_unique<test::FoxgloveClient>(po.viewer->port()));
+      clients.back()->subscribe();
+      clients.back()->start();
+    }
+  }
   Pipeline pipeline(config, po);
   std::vector<double> front_end_ms, map_ms;  // the odometry's own split of its time (publisher thread)
   pipeline.add_sink([&](const PoseEvent& ev) {
@@ -178,6 +193,13 @@ int main(int argc, char** argv) {
               pct(front_end_ms, 0.5), pct(front_end_ms, 0.99), pct(map_ms, 0.5), pct(map_ms, 0.99));
   std::printf("IMU latency, sample in -> IMU-rate pose written (pipeline): median %.1f us, p99 %.1f us, max %.1f us (n=%zu)\n",
               il.median_us, il.p99_us, il.max_us, il.count);
+  if (po.viewer) {
+    const auto v = po.viewer->stats();
+    std::printf("live view: %d viewers; %llu messages sent, %llu dropped from slow viewers, %llu posts dropped; the first viewer "
+                "received %zu scans, %zu maps, %zu poses\n", viewers, static_cast<unsigned long long>(v.messages_sent),
+                static_cast<unsigned long long>(v.messages_dropped), static_cast<unsigned long long>(v.posts_dropped),
+                clients[0]->count("/liod/scan"), clients[0]->count("/liod/map"), clients[0]->count("/liod/pose/odom"));
+  }
   std::printf("load average after: %s\n", load_average().c_str());
   pipeline.join();
   if (auto* backend = pipeline.backend()) std::printf("%s", backend->summary().c_str());

@@ -56,12 +56,24 @@ struct PoseSocketConfig {
   double stale_after_s = 0.3;       // live: a pose published later than this after its input arrived is stale, not ok
 };
 
+/// The live view: a Foxglove WebSocket server (foxglove_server.hpp) for Foxglove Studio.
+struct ViewerConfig {
+  int foxglove_port = 0;                  // 0 = off; else the TCP port (Foxglove's default: 8765)
+  std::string bind_address = "127.0.0.1"; // IPv4/IPv6 address to listen on (0.0.0.0: every interface)
+  int max_clients = 8;                    // further connections are refused
+  int client_queue_bytes = 8 << 20;       // a client further behind than this loses its oldest messages
+  double map_interval_s = 1.0;            // the local map and the trajectories at most this often
+  double map_voxel_m = 0.5;               // the local map's downsampling (one point per voxel)
+  double scan_voxel_m = 0.2;              // the scan's downsampling; 0 = every point
+};
+
 /// Everything the daemon's own parts need.
 struct DaemonConfig {
   LogConfig log;
   OutputConfig output;
   ThreadsConfig threads;
   PoseSocketConfig pose_socket;
+  ViewerConfig viewer;
 };
 
 }  // namespace liod

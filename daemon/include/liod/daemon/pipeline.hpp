@@ -121,6 +121,7 @@ class ImuSource {
 };
 
 class PoseServer;
+class FoxgloveServer;
 
 /// Counters of the previous health report (to turn counts into rates).
 struct HealthRates {
@@ -140,6 +141,9 @@ struct PipelineOptions {
   BackendWorkerOptions backend;
   /// Called on the odometry thread as it starts on each scan (tests: a slow odometry).
   std::function<void(const ScanItem&)> before_scan;
+  /// The live view (viewer.foxglove_port; null: off). The threads post copies to it and never
+  /// wait for it: the scan only while a viewer subscribes to it.
+  std::shared_ptr<FoxgloveServer> viewer;
 };
 
 /// Totals for the replay summary (valid after join()).

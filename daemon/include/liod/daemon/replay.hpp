@@ -29,6 +29,7 @@ struct ReplayOptions {
   bool progress = false;           // a progress bar on stderr
   double pace = 0.0;               // 0 = as fast as possible; 1 = recorded pace
   std::string pose_socket;         // optional: also serve poses on this Unix socket
+  int foxglove_port = 0;           // optional: the live view on this port (0: viewer.foxglove_port)
 };
 
 /// Returns the process exit code; prints a summary to `out`.
