@@ -2,6 +2,7 @@
 
 #include <CLI/CLI.hpp>
 #include <exception>
+#include <filesystem>
 #include <ostream>
 #include <string>
 
@@ -38,6 +39,9 @@ struct CliArgs {
 
 Trajectory load(const std::string& path, Format format, const std::string& times_path) {
   if (is_oxts_dir(path)) return read_oxts(path);
+  if (std::filesystem::is_directory(path)) {
+    throw InputError(path + ": a folder without oxts/timestamps.txt (give a trajectory file or a KITTI raw drive)");
+  }
   Trajectory t = read_trajectory(path, format);
   if (!times_path.empty()) {
     std::vector<double> stamps = read_times(times_path);
