@@ -136,13 +136,13 @@ CloudSweep read_kitti_sweep(const KittiSweepFile& sweep, std::uint64_t sequence)
 
 ImuSample parse_oxts_line(std::string_view line, double time, const std::string& file) {
   const std::vector<double> v = numbers(detail::trim(line));
-  constexpr std::size_t kAf = 14, kWf = 20;  // af al au, wf wl wu: the devkit's field order
-  if (v.size() < kWf + 3) throw InputError(file, 1, "expected the 30 OXTS numbers, found " + std::to_string(v.size()));
+  constexpr std::size_t kAx = 11, kWx = 17;  // ax ay az, wx wy wz: the devkit's field order
+  if (v.size() < kWx + 6) throw InputError(file, 1, "expected the 30 OXTS numbers, found " + std::to_string(v.size()));
   ImuSample s;
   s.time = time;
-  s.accel = Eigen::Vector3d(v[kAf], v[kAf + 1], v[kAf + 2]);
-  s.gyro = Eigen::Vector3d(v[kWf], v[kWf + 1], v[kWf + 2]);
-  if (!s.accel.allFinite() || !s.gyro.allFinite()) throw InputError(file, 1, "af al au or wf wl wu not finite");
+  s.accel = Eigen::Vector3d(v[kAx], v[kAx + 1], v[kAx + 2]);
+  s.gyro = Eigen::Vector3d(v[kWx], v[kWx + 1], v[kWx + 2]);
+  if (!s.accel.allFinite() || !s.gyro.allFinite()) throw InputError(file, 1, "ax ay az or wx wy wz not finite");
   return s;
 }
 

@@ -131,8 +131,8 @@ fs::path write_drive(const fs::path& root) {
     // lat lon alt roll pitch yaw vn ve vf vl vu ax ay az af al au wx wy wz wf wl wu, then 7 more
     for (int f = 0; f < 30; ++f) {
       double v = 0.0;
-      if (f == 14) v = t < kRestS ? 0.0 : kAccel;
-      if (f == 16) v = kGravity;
+      if (f == 11 || f == 14) v = t < kRestS ? 0.0 : kAccel;  // ax, af: level, the same
+      if (f == 13 || f == 16) v = kGravity;
       oxts << (f ? " " : "") << v;
     }
     oxts << '\n';

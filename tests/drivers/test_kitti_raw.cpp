@@ -32,12 +32,12 @@ TEST(KittiRaw, OxtsLinesGiveTheBodyRatesAndAccelerations) {
   for (int f = 0; f < 30; ++f) line += std::to_string(f) + ".5 ";
   const ImuSample s = parse_oxts_line(line, 12.0, "oxts.txt");
   EXPECT_EQ(s.time, 12.0);
-  EXPECT_EQ(s.accel, Eigen::Vector3d(14.5, 15.5, 16.5));  // af al au
-  EXPECT_EQ(s.gyro, Eigen::Vector3d(20.5, 21.5, 22.5));   // wf wl wu
+  EXPECT_EQ(s.accel, Eigen::Vector3d(11.5, 12.5, 13.5));  // ax ay az
+  EXPECT_EQ(s.gyro, Eigen::Vector3d(17.5, 18.5, 19.5));   // wx wy wz
   EXPECT_THROW((void)parse_oxts_line("1 2 3", 0.0, "oxts.txt"), InputError);
   EXPECT_THROW((void)parse_oxts_line(line + "x", 0.0, "oxts.txt"), InputError);
   std::string not_finite;
-  for (int f = 0; f < 30; ++f) not_finite += f == 21 ? "nan " : "0 ";
+  for (int f = 0; f < 30; ++f) not_finite += f == 18 ? "nan " : "0 ";
   EXPECT_THROW((void)parse_oxts_line(not_finite, 0.0, "oxts.txt"), InputError);
 }
 

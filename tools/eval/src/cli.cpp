@@ -2,11 +2,13 @@
 
 #include <CLI/CLI.hpp>
 #include <exception>
+#include <filesystem>
 #include <ostream>
 #include <string>
 
 #include "liod/eval/evaluate.hpp"
 #include "liod/eval/io.hpp"
+#include "liod/eval/oxts.hpp"
 #include "liod/eval/plot.hpp"
 #include "liod/eval/report.hpp"
 
@@ -36,6 +38,10 @@ struct CliArgs {
 };
 
 Trajectory load(const std::string& path, Format format, const std::string& times_path) {
+  if (is_oxts_dir(path)) return read_oxts(path);
+  if (std::filesystem::is_directory(path)) {
+    throw InputError(path + ": a folder without oxts/timestamps.txt (give a trajectory file or a KITTI raw drive)");
+  }
   Trajectory t = read_trajectory(path, format);
   if (!times_path.empty()) {
     std::vector<double> stamps = read_times(times_path);
@@ -52,6 +58,7 @@ Trajectory load(const std::string& path, Format format, const std::string& times
 // first left camera's frame, y down.
 Eigen::Vector3d up_axis(const std::string& text, Format format, const std::string& gt_path) {
   if (text == "auto") {
+    if (is_oxts_dir(gt_path)) return Eigen::Vector3d::UnitZ();  // the devkit's OXTS poses: z up
     const Format f = format == Format::Auto ? detect_format(gt_path) : format;
     return f == Format::Kitti ? Eigen::Vector3d(0, -1, 0) : Eigen::Vector3d::UnitZ();
   }
@@ -66,7 +73,7 @@ int run_cli(int argc, const char* const* argv, std::ostream& out, std::ostream& 
   CLI::App app{"liod-eval: trajectory accuracy (ATE, RPE as evo computes them, and the KITTI odometry metric)",
                "liod-eval"};
   CliArgs a;
-  app.add_option("--gt", a.gt, "Ground-truth trajectory (TUM or KITTI)")->required();
+  app.add_option("--gt", a.gt, "Ground-truth trajectory (TUM or KITTI), or a KITTI raw drive's OXTS (DRIVE or DRIVE/oxts)")->required();
   app.add_option("--est", a.est, "Estimated trajectory (TUM or KITTI)")->required();
   app.add_option("--format", a.format, "auto|tum|kitti (auto: 8 numbers a line = TUM, 12 = KITTI)")
       ->check(CLI::IsMember({"auto", "tum", "kitti"}));

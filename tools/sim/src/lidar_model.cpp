@@ -57,6 +57,61 @@ HeliosCalibration load_angles_csv(const std::string& path) {
   return cal;
 }
 
+double ego_hit_range(const EgoBody& ego, const Pose& imu_from_lidar, const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
+  const Eigen::Vector3d ob = imu_from_lidar.rotation * o + imu_from_lidar.translation;
+  const Eigen::Vector3d db = imu_from_lidar.rotation * d;
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t b = 0; b < ego.box_min.size(); ++b) {
+    double tn = -1e18;
+    double tf = 1e18;
+    for (int a = 0; a < 3; ++a) {
+      if (std::abs(db[a]) < 1e-12) {
+        if (ob[a] < ego.box_min[b][a] || ob[a] > ego.box_max[b][a]) {
+          tn = 1e18;
+        }
+        continue;
+      }
+      double t1 = (ego.box_min[b][a] - ob[a]) / db[a];
+      double t2 = (ego.box_max[b][a] - ob[a]) / db[a];
+      if (t1 > t2) {
+        std::swap(t1, t2);
+      }
+      tn = std::max(tn, t1);
+      tf = std::min(tf, t2);
+    }
+    if (tn <= tf && tn > 0.0) {
+      best = std::min(best, static_cast<double>(static_cast<float>(tn)));
+    }
+  }
+  return best;
+}
+
+Echo echo_strength(const RayHit& hit, double range_at_10pct) {
+  Echo e;
+  e.reflectivity = hit.reflectivity;
+  e.cos_incidence = std::max(hit.cos_incidence, 1e-4);
+  switch (hit.kind) {
+    case SurfaceKind::Retroreflective:
+      e.reflectivity = 20.0;
+      e.cos_incidence = std::pow(e.cos_incidence, 0.3);
+      break;
+    case SurfaceKind::Glass:
+      // Specular: only a beam nearly normal to the pane comes back.
+      e.reflectivity = e.cos_incidence > 0.985 ? 0.8 : 0.02;
+      break;
+    case SurfaceKind::Diffuse:
+    case SurfaceKind::Porous:
+      break;
+  }
+  e.snr = e.reflectivity * e.cos_incidence / 0.1 * std::pow(range_at_10pct / std::max(hit.range, 0.5), 2.0);
+  return e;
+}
+
+double detection_probability(double snr, double random_dropout) {
+  // A logistic in log(SNR): 50 % at SNR 1.
+  return (1.0 - random_dropout) / (1.0 + std::pow(snr, -2.8));
+}
+
 EgoBody EgoBody::passenger_car() {
   // IMU frame: x forward, z up, the IMU 0.80 m above the road at mid-wheelbase.
   EgoBody e;
@@ -99,30 +154,7 @@ LidarModel::LidarModel(const HeliosCalibration& published, const LidarParams& pa
       if (ego == nullptr) {
         continue;
       }
-      const Eigen::Vector3d ob = imu_from_lidar.rotation * o + imu_from_lidar.translation;
-      const Eigen::Vector3d db = imu_from_lidar.rotation * d;
-      for (std::size_t b = 0; b < ego->box_min.size(); ++b) {
-        double tn = -1e18;
-        double tf = 1e18;
-        for (int a = 0; a < 3; ++a) {
-          if (std::abs(db[a]) < 1e-12) {
-            if (ob[a] < ego->box_min[b][a] || ob[a] > ego->box_max[b][a]) {
-              tn = 1e18;
-            }
-            continue;
-          }
-          double t1 = (ego->box_min[b][a] - ob[a]) / db[a];
-          double t2 = (ego->box_max[b][a] - ob[a]) / db[a];
-          if (t1 > t2) {
-            std::swap(t1, t2);
-          }
-          tn = std::max(tn, t1);
-          tf = std::min(tf, t2);
-        }
-        if (tn <= tf && tn > 0.0) {
-          ego_range_[slot(k, c)] = std::min(ego_range_[slot(k, c)], static_cast<float>(tn));
-        }
-      }
+      ego_range_[slot(k, c)] = static_cast<float>(ego_hit_range(*ego, imu_from_lidar, o, d));
       ego_reflectivity_ = ego->reflectivity;
     }
   }
@@ -131,25 +163,12 @@ LidarModel::LidarModel(const HeliosCalibration& published, const LidarParams& pa
 bool LidarModel::measure(const RayHit& hit, bool ego, int channel, Rng& rng, ChannelReturn& out,
                          double* strength) const {
   const double d = hit.range;
-  double rho = hit.reflectivity;
-  double cosi = std::max(hit.cos_incidence, 1e-4);
-  switch (hit.kind) {
-    case SurfaceKind::Retroreflective:
-      rho = 20.0;
-      cosi = std::pow(cosi, 0.3);
-      break;
-    case SurfaceKind::Glass:
-      // Specular: only a beam nearly normal to the pane comes back.
-      rho = cosi > 0.985 ? 0.8 : 0.02;
-      break;
-    case SurfaceKind::Diffuse:
-    case SurfaceKind::Porous:
-      break;
-  }
-  const double snr = rho * cosi / 0.1 * std::pow(params_.range_at_10pct / std::max(d, 0.5), 2.0);
+  const Echo echo = echo_strength(hit, params_.range_at_10pct);
+  const double rho = echo.reflectivity;
+  const double cosi = echo.cos_incidence;
+  const double snr = echo.snr;
   *strength = snr;
-  // Detection probability is a logistic in log(SNR): 50 % at SNR 1.
-  const double p_detect = (1.0 - noise_.random_dropout) / (1.0 + std::pow(snr, -2.8));
+  const double p_detect = detection_probability(snr, noise_.random_dropout);
   if (!ego && rng.uniform() >= p_detect) {
     return false;
   }

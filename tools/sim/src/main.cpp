@@ -17,7 +17,7 @@
 
 int main(int argc, char** argv) {
   using liod::sim::SimConfig;
-  CLI::App app{"liod-sim: simulated RS-Helios-5515 + IMU drive with ground truth"};
+  CLI::App app{"liod-sim: simulated RS-Helios-5515 (or HDL-64E in KITTI raw's layout) + IMU drive with ground truth"};
   std::string route = "urban";
   SimConfig cfg;
   cfg.angles_csv = std::string(LIOD_SHARED_DIR) + "/data/robosense/helios32_angles.csv";
@@ -35,7 +35,10 @@ int main(int argc, char** argv) {
   app.add_flag("--static-start", stationary, "stand still first (default for loop, figure8, tunnel)");
   app.add_option("--static-seconds", cfg.scene.static_seconds, "rest before moving off with --static-start")
       ->default_val(3.0);
-  app.add_option("--imu-rate", cfg.imu_rate, "IMU samples per second")->default_val(200.0);
+  auto* imu_rate_option = app.add_option("--imu-rate", cfg.imu_rate, "IMU samples per second")->default_val(200.0);
+  std::string lidar = "helios";
+  app.add_option("--lidar", lidar, "helios (RS-Helios-5515 packets, lidar.pcap) or hdl64e (KITTI raw layout, 100 Hz OXTS)");
+  app.add_option("--kitti-raw", cfg.kitti_dir, "with --lidar hdl64e: existing folder for KITTI raw's layout (default: --out)");
   app.add_flag("--no-noise", no_noise, "exact IMU and LiDAR ranges (detection dropouts remain)");
   app.add_option("--angle-error-deg", cfg.angle_error_deg,
                  "largest difference between the LiDAR's true and published beam angles, per channel")
@@ -95,6 +98,30 @@ int main(int argc, char** argv) {
     return 2;
   }
   cfg.conditions = road;
+  if (lidar != "helios" && lidar != "hdl64e") {
+    std::fprintf(stderr, "liod-sim: --lidar takes helios or hdl64e, got '%s'\n", lidar.c_str());
+    return 2;
+  }
+  if (lidar == "hdl64e") {
+    // KITTI's OXTS extract is 100 Hz; imu.csv beside it holds the same samples.
+    if (*imu_rate_option && cfg.imu_rate != 100.0) {
+      std::fprintf(stderr, "liod-sim: --lidar hdl64e writes the 100 Hz OXTS extract: --imu-rate must be 100\n");
+      return 2;
+    }
+    if (cfg.dual_return || road.traffic || road.dropout > 0.0 || road.rain_rate > 0.0) {
+      std::fprintf(stderr, "liod-sim: --lidar hdl64e takes no --dual-return, --traffic, --dropout or --rain\n");
+      return 2;
+    }
+    cfg.imu_rate = 100.0;
+    cfg.lidar = liod::sim::LidarKind::Hdl64e;
+  } else if (!cfg.kitti_dir.empty()) {
+    std::fprintf(stderr, "liod-sim: --kitti-raw needs --lidar hdl64e\n");
+    return 2;
+  }
+  if (!cfg.kitti_dir.empty() && !std::filesystem::is_directory(cfg.kitti_dir)) {
+    std::fprintf(stderr, "liod-sim: --kitti-raw folder '%s' does not exist\n", cfg.kitti_dir.c_str());
+    return 2;
+  }
   if (route_seed_option->count() > 0) cfg.scene.route_seed = route_seed;
 
   const auto kind = liod::sim::parse_route(route);
@@ -182,7 +209,15 @@ int main(int argc, char** argv) {
       }
     });
     const auto t2 = std::chrono::steady_clock::now();
-    if (!quiet) {
+    if (!quiet && cfg.lidar == liod::sim::LidarKind::Hdl64e) {
+      std::fprintf(stderr,
+                   "\rliod-sim: %s seed %llu, %.1f s, %.0f m driven: %llu HDL-64E sweeps, %.1f M returns of %.1f M rays, "
+                   "%llu OXTS samples in %s\n",
+                   route.c_str(), static_cast<unsigned long long>(cfg.scene.seed), cfg.scene.duration,
+                   sim.drive_stats().distance, static_cast<unsigned long long>(report.sweeps),
+                   static_cast<double>(report.returns) * 1e-6, static_cast<double>(report.rays) * 1e-6,
+                   static_cast<unsigned long long>(report.imu_samples), liod::sim::kitti_raw_drive(cfg).c_str());
+    } else if (!quiet) {
       const double build = std::chrono::duration<double>(t1 - t0).count();
       const double run = std::chrono::duration<double>(t2 - t1).count();
       std::fprintf(stderr,

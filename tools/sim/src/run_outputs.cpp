@@ -17,8 +17,6 @@
 namespace liod::sim {
 
 namespace {
-constexpr std::uint64_t kImuStream = 0x696D75ULL;
-
 struct FileCloser {
   void operator()(std::FILE* f) const { std::fclose(f); }
 };
@@ -59,7 +57,8 @@ RunReport Simulation::write_all(const std::function<void(double)>& progress) con
   if (!std::filesystem::is_directory(dir)) {
     throw std::runtime_error("output directory '" + config_.out_dir + "' does not exist");
   }
-  RunReport report = write_lidar((dir / "lidar.pcap").string(), progress);
+  RunReport report = config_.lidar == LidarKind::Hdl64e ? write_kitti_raw(progress)
+                                                         : write_lidar((dir / "lidar.pcap").string(), progress);
   write_imu_and_truth(report);
   write_yaml(report);
   return report;
@@ -171,28 +170,14 @@ void Simulation::write_yaml(const RunReport& report) const {
     << num(q.w()) << "]\n"
     << "  lidar_to_imu_rpy_deg: " << vec(rpy) << "  # R = Rz(yaw) Ry(pitch) Rx(roll)\n"
     << "  lidar_time_offset_s: " << num(time_offset_) << "\n"
-    << "lidar:\n"
-    << "  model: RS-Helios-5515 (32 beams), 600 rpm, 1800 firings per turn\n"
-    << "  return_mode: " << (config_.dual_return ? "dual (strongest, last)" : "single (strongest)") << "\n"
-    << "  angles_csv: \"" << config_.angles_csv << "\"\n"
-    << "  firing_offsets: nebula measured single-return table (us)\n"
-    << "  first_azimuth_step: " << az_start_step_ << "\n"
-    << "  max_range_m: " << num(lidar_params_.max_range) << "\n"
-    << "  min_range_m: " << num(lidar_params_.min_range) << "\n"
-    << "  range_at_10pct_reflectivity_m: " << num(lidar_params_.range_at_10pct) << "\n"
-    << "  range_sigma_m: " << num(lidar_noise_.range_sigma) << "  # + per_m * d + weak / sqrt(snr)\n"
-    << "  range_sigma_per_m: " << num(lidar_noise_.range_sigma_per_m) << "\n"
-    << "  weak_return_sigma_m: " << num(lidar_noise_.weak_return_sigma) << "\n"
-    << "  channel_bias_sigma_m: " << num(lidar_noise_.channel_bias_sigma) << "\n"
-    << "  angle_error_deg: " << num(lidar_noise_.angle_error_deg) << "  # uniform, true vs published\n"
-    << "  random_dropout: " << num(lidar_noise_.random_dropout) << "\n"
-    << "  channel_bias_m: [";
-  for (int c = 0; c < kChannels; ++c) {
-    s << (c ? ", " : "") << num(config_.noise ? lidar_->channel_bias()[static_cast<std::size_t>(c)] : 0.0);
+    << "lidar:\n";
+  if (hdl_) {
+    write_hdl64e_yaml(s);
+  } else {
+    write_helios_yaml(s);
   }
   const ImuModel probe(imu_noise_, config_.imu_rate, derive_seed(config_.scene.seed, kImuStream));
-  s << "]\n"
-    << "imu:\n"
+  s << "imu:\n"
     << "  rate_hz: " << num(config_.imu_rate) << "\n"
     << "  gravity_mps2: 9.80665\n"
     << "  gyro_noise_density_rad_s_sqrthz: " << num(imu_noise_.gyro_noise_density) << "\n"
@@ -215,9 +200,56 @@ void Simulation::write_yaml(const RunReport& report) const {
     << "  difop_packets: " << report.difop_packets << "\n"
     << "  lidar_returns: " << report.returns << "\n"
     << "  imu_samples: " << report.imu_samples << "\n";
+  if (hdl_) {
+    s << "  kitti_raw_sweeps: " << report.sweeps << "\n"
+      << "  kitti_raw_drive: \"" << kitti_raw_drive(config_) << "\"\n";
+  }
   if (!s) {
     throw std::runtime_error("cannot write scenario.yaml in '" + config_.out_dir + "'");
   }
+}
+
+void Simulation::write_helios_yaml(std::ostream& s) const {
+  s << "  model: RS-Helios-5515 (32 beams), 600 rpm, 1800 firings per turn\n"
+    << "  return_mode: " << (config_.dual_return ? "dual (strongest, last)" : "single (strongest)") << "\n"
+    << "  angles_csv: \"" << config_.angles_csv << "\"\n"
+    << "  firing_offsets: nebula measured single-return table (us)\n"
+    << "  first_azimuth_step: " << az_start_step_ << "\n"
+    << "  max_range_m: " << num(lidar_params_.max_range) << "\n"
+    << "  min_range_m: " << num(lidar_params_.min_range) << "\n"
+    << "  range_at_10pct_reflectivity_m: " << num(lidar_params_.range_at_10pct) << "\n"
+    << "  range_sigma_m: " << num(lidar_noise_.range_sigma) << "  # + per_m * d + weak / sqrt(snr)\n"
+    << "  range_sigma_per_m: " << num(lidar_noise_.range_sigma_per_m) << "\n"
+    << "  weak_return_sigma_m: " << num(lidar_noise_.weak_return_sigma) << "\n"
+    << "  channel_bias_sigma_m: " << num(lidar_noise_.channel_bias_sigma) << "\n"
+    << "  angle_error_deg: " << num(lidar_noise_.angle_error_deg) << "  # uniform, true vs published\n"
+    << "  random_dropout: " << num(lidar_noise_.random_dropout) << "\n"
+    << "  channel_bias_m: [";
+  for (int c = 0; c < kChannels; ++c) {
+    s << (c ? ", " : "") << num(config_.noise ? lidar_->channel_bias()[static_cast<std::size_t>(c)] : 0.0);
+  }
+  s << "]\n";
+}
+
+void Simulation::write_hdl64e_yaml(std::ostream& s) const {
+  const HdlParams p;
+  s << "  model: Velodyne HDL-64E S2 (64 beams), 600 rpm, " << kHdlFiringsPerTurn << " firings per turn, counter-clockwise\n"
+    << "  output: KITTI raw (velodyne_points/data/*.bin: x y z reflectance, no ring, no time; oxts/ at 100 Hz)\n"
+    << "  max_range_m: " << num(p.max_range) << "\n"
+    << "  min_range_m: " << num(p.min_range) << "\n"
+    << "  range_at_10pct_reflectivity_m: " << num(p.range_at_10pct) << "\n"
+    << "  unit_elevation_spread_deg: " << num(p.unit_elevation_spread_deg) << "  # uniform, the unit vs the manual's table\n"
+    << "  range_sigma_m: " << num(lidar_noise_.range_sigma) << "  # + per_m * d + weak / sqrt(snr)\n"
+    << "  range_sigma_per_m: " << num(lidar_noise_.range_sigma_per_m) << "\n"
+    << "  weak_return_sigma_m: " << num(lidar_noise_.weak_return_sigma) << "\n"
+    << "  channel_bias_sigma_m: " << num(lidar_noise_.channel_bias_sigma) << "\n"
+    << "  angle_error_deg: " << num(lidar_noise_.angle_error_deg) << "  # uniform, true vs calibration file\n"
+    << "  random_dropout: " << num(lidar_noise_.random_dropout) << "\n"
+    << "  elevations_deg: [";
+  for (int l = 0; l < kHdlLasers; ++l) s << (l ? ", " : "") << num(hdl_->true_elevations_deg()[static_cast<std::size_t>(l)]);
+  s << "]\n  channel_bias_m: [";
+  for (int l = 0; l < kHdlLasers; ++l) s << (l ? ", " : "") << num(hdl_->range_bias()[static_cast<std::size_t>(l)]);
+  s << "]\n";
 }
 
 void Simulation::write_conditions_yaml(std::ostream& s) const {

@@ -77,6 +77,14 @@ Simulation::Simulation(SimConfig config) : config_(std::move(config)) {
   }
   imu_noise_.enabled = config_.noise;
   ego_ = EgoBody::passenger_car();
+  if (config_.lidar == LidarKind::Hdl64e) {
+    if (config_.dual_return || hard.traffic || hard.dropout > 0.0 || hard.rain_rate > 0.0) {
+      throw std::invalid_argument("the HDL-64E takes no dual return, traffic, dropout or rain");
+    }
+    hdl_ = std::make_unique<Hdl64eModel>(HdlParams{}, lidar_noise_, imu_from_lidar_, config_.ego_body ? &ego_ : nullptr,
+                                         req.seed);
+    return;
+  }
   const HeliosCalibration cal = load_angles_csv(config_.angles_csv);
   lidar_ = std::make_unique<LidarModel>(cal, lidar_params_, lidar_noise_, imu_from_lidar_,
                                         config_.ego_body ? &ego_ : nullptr, req.seed);

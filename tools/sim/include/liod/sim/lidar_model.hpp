@@ -68,6 +68,22 @@ struct EgoBody {
   static EgoBody passenger_car();
 };
 
+/// The range along a LiDAR-frame ray (origin `o`, unit `d`) at which it meets the vehicle's own
+/// body, infinity if never.
+double ego_hit_range(const EgoBody& ego, const Pose& imu_from_lidar, const Eigen::Vector3d& o, const Eigen::Vector3d& d);
+
+/// What a surface sends back of a beam (link budget): its effective reflectivity and incidence, and
+/// the SNR against a 10 % target at normal incidence that is detected half the time at
+/// `range_at_10pct`.
+struct Echo {
+  double reflectivity = 0.0;
+  double cos_incidence = 1.0;
+  double snr = 0.0;
+};
+Echo echo_strength(const RayHit& hit, double range_at_10pct);
+/// The chance that an echo of this SNR is detected, `random_dropout` lost whatever its strength.
+double detection_probability(double snr, double random_dropout);
+
 struct ChannelReturn {
   std::uint16_t raw = 0;  // distance in 2.5 mm units, 0 = no return
   std::uint8_t intensity = 0;
