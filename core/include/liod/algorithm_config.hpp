@@ -77,7 +77,7 @@ struct OdometryConfig {
   double map_voxel_m = 1.0;          // local map hash cell size
   int map_points_per_voxel = 20;
   double map_min_point_spacing_m = 0.2;
-  int map_min_observations = 1;      // keyframes that must have seen a map voxel before it is matched (local_map.hpp)
+  int map_min_observations = 2;      // keyframes that must have seen a map voxel before it is matched (local_map.hpp)
   int max_iterations = 5;
   int forced_searches = 1;  // iterations that search the map afresh; later ones only if the pose moved
   double lidar_noise_m = 0.03;       // std of a point-to-plane/line residual
