@@ -68,8 +68,10 @@ double parse_kitti_stamp(const std::string& text, const std::string& where) {
     std::size_t end = rest.find_last_not_of(" \t\r");
     const std::string frac = end == std::string::npos ? std::string() : rest.substr(0, end + 1);
     if (!frac.empty()) {
+      // The parsed string outlives the check of where strtod stopped in it.
+      const std::string decimal = "0" + frac;
       char* stop = nullptr;
-      fraction = std::strtod(("0" + frac).c_str(), &stop);
+      fraction = std::strtod(decimal.c_str(), &stop);
       ok = frac.front() == '.' && *stop == '\0' && fraction < 1.0;
     }
   }
