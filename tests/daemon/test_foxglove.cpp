@@ -2,9 +2,7 @@
 // of the simulated drive. What Foxglove Studio would show must arrive and match the replay; bad
 // clients (stuck, garbage, gone mid-frame, wrong protocol) must not change a single pose.
 #include <gtest/gtest.h>
-#include <sys/socket.h>
 
-#include <boost/asio.hpp>
 #include <cmath>
 #include <map>
 #include <set>
@@ -14,6 +12,7 @@
 #include "pipeline_run.hpp"
 #include "reference_replay.hpp"
 #include "sim_drive.hpp"
+#include "websocket_client.hpp"
 
 namespace liod {
 namespace {
@@ -194,13 +193,6 @@ TEST(Foxglove, ReplayReachesSubscribedViewers) {
   EXPECT_EQ(stats.bad_requests, 0U);
 }
 
-// A raw TCP connection to the server's port.
-boost::asio::ip::tcp::socket raw_connect(boost::asio::io_context& ioc, std::uint16_t port) {
-  boost::asio::ip::tcp::socket s(ioc);
-  s.connect({boost::asio::ip::make_address("127.0.0.1"), port});
-  return s;
-}
-
 TEST(Foxglove, BadClientsDoNotStallOrChangeTheOdometry) {
   LIOD_REQUIRE_SIM_DRIVE(drive);
   const auto reference = test::read_tum(test::reference_replay(*drive) / "scan.tum");
@@ -223,9 +215,8 @@ TEST(Foxglove, BadClientsDoNotStallOrChangeTheOdometry) {
   garbage.subscribe({"/liod/pose/odom"});
   garbage.start();
   // Not a WebSocket at all, and a WebSocket of another protocol: refused.
-  boost::asio::io_context ioc;
-  auto junk = raw_connect(ioc, port);
-  boost::asio::write(junk, boost::asio::buffer(std::string("\x16\x03\x01 definitely not HTTP\r\n\r\n")));
+  test::TcpConnection junk(port);
+  junk.write(std::string("\x16\x03\x01 definitely not HTTP\r\n\r\n"));
   EXPECT_THROW(FoxgloveClient(port, "other.protocol"), std::exception);
   // Gone in the middle of a frame: the first bytes of a masked text frame, then closed.
   {
@@ -233,14 +224,13 @@ TEST(Foxglove, BadClientsDoNotStallOrChangeTheOdometry) {
     half.subscribe();
   }
   {
-    auto s = raw_connect(ioc, port);
+    test::TcpConnection s(port);
     const std::string upgrade = "GET / HTTP/1.1\r\nHost: x\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
                                 "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n"
                                 "Sec-WebSocket-Protocol: foxglove.websocket.v1\r\n\r\n";
-    boost::asio::write(s, boost::asio::buffer(upgrade));
-    boost::asio::streambuf response;
-    boost::asio::read_until(s, response, "\r\n\r\n");
-    boost::asio::write(s, boost::asio::buffer(std::string("\x81\xFE\x01\x00\x11\x22", 6)));  // 256-byte frame, 2 sent
+    s.write(upgrade);
+    s.read_until("\r\n\r\n", 16384);
+    s.write(std::string("\x81\xFE\x01\x00\x11\x22", 6));  // 256-byte frame, 2 sent
   }
 
   const auto run = replay_with(config, *drive, server);
