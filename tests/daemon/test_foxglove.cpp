@@ -69,6 +69,10 @@ std::vector<Eigen::Vector3d> replay_positions(const std::vector<test::FoxgloveMe
 TEST(Foxglove, ReplayReachesSubscribedViewers) {
   LIOD_REQUIRE_SIM_DRIVE(drive);
   Config config = test::drive_config(*drive);
+  // Every pose must arrive: the queue holds the whole replay. With the default 8 MiB (a few scans)
+  // a client loses its oldest messages whenever the replay, as fast as the cores go, leaves its
+  // reader behind, as under ThreadSanitizer on two cores (BadClients tests that loss).
+  config.viewer.client_queue_bytes = 1 << 30;
   auto server = make_server(config);
   FoxgloveClient all(server->port());
   FoxgloveClient poses_only(server->port());  // several clients, each with its own subscriptions
@@ -105,7 +109,8 @@ TEST(Foxglove, ReplayReachesSubscribedViewers) {
     const auto t = all.messages("/liod/trajectory/odom");
     return all.count("/liod/pose/odom") >= truth.size() && !t.empty() &&
            std::abs(stamp_s(t.back().body.at("timestamp")) - last_time) < 1e-6;
-  }, std::chrono::seconds(60))) << all.count("/liod/pose/odom") << " of " << truth.size() << " poses";
+  }, std::chrono::seconds(60))) << all.count("/liod/pose/odom") << " of " << truth.size() << " poses; dropped "
+                                  << server->stats().messages_dropped << " messages, " << server->stats().posts_dropped << " posts";
 
   // Every scan pose, in order, where the replay put it.
   const auto poses = all.messages("/liod/pose/odom");
@@ -189,6 +194,7 @@ TEST(Foxglove, ReplayReachesSubscribedViewers) {
   EXPECT_GT(health.back().body.at("odometry").at("scans").get<int>(), 0);
   EXPECT_TRUE(health.back().body.contains("latency_us"));
   const auto stats = server->stats();
+  EXPECT_EQ(stats.messages_dropped, 0U);
   EXPECT_EQ(stats.connections, 2U);
   EXPECT_EQ(stats.bad_requests, 0U);
 }
