@@ -290,7 +290,8 @@ class Session : public std::enable_shared_from_this<Session> {
   }
 
   // deflateSupported = false: liod never negotiates permessage-deflate (RFC 7692), and without it
-  // the instantiation leaves Beast's deflate code out (the file compiles in ~15 % less time).
+  // the instantiation leaves Beast's deflate code out (gcc -O3 compiles this file in about 30 %
+  // less time; clang -O2 in the sanitizer trees, in about the same).
   websocket::stream<beast::tcp_stream, false> ws_;
   FoxgloveServer::Impl& server_;
   beast::flat_buffer buffer_;
